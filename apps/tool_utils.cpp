@@ -1,0 +1,106 @@
+/*
+ * SPDX-License-Identifier: BSD-3-Clause
+ */
+#include "tool_utils.h"
+
+#include <pcl_movers/io/sequence.h>
+
+#include <unistd.h>
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+
+namespace fs = std::filesystem;
+
+namespace pcl_movers {
+namespace tools {
+namespace {
+
+bool isNumber(const std::string& s) {
+  char* end = nullptr;
+  std::strtod(s.c_str(), &end);
+  return end && *end == '\0' && !s.empty();
+}
+
+bool contains(const std::vector<std::string>& list, const std::string& s) {
+  return std::find(list.begin(), list.end(), s) != list.end();
+}
+
+}  // namespace
+
+void checkArguments(int argc, char** argv, const std::vector<std::string>& flags,
+                    const std::vector<std::string>& with_value) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg.size() < 2 || arg[0] != '-' || isNumber(arg)) continue;
+    if (contains(with_value, arg)) {
+      if (i + 1 >= argc) throw InputError("option " + arg + " needs a value");
+      ++i;
+      continue;
+    }
+    if (!contains(flags, arg) && arg != "-h" && arg != "--help")
+      throw InputError("unknown option " + arg + " (see -h)");
+  }
+}
+
+std::vector<std::string> positionalArguments(int argc, char** argv,
+                                             const std::vector<std::string>& with_value) {
+  std::vector<std::string> out;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg.size() >= 2 && arg[0] == '-' && !isNumber(arg)) {
+      if (contains(with_value, arg)) ++i;
+      continue;
+    }
+    out.push_back(arg);
+  }
+  return out;
+}
+
+std::vector<std::string> listScanInputs(const std::string& file_or_folder) {
+  std::error_code ec;
+  if (!fs::exists(file_or_folder, ec)) throw InputError(file_or_folder, 0, "does not exist");
+  if (fs::is_directory(file_or_folder, ec)) return io::SequenceReader(file_or_folder).framePaths();
+  std::string ext = fs::path(file_or_folder).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
+  if (ext != ".pcd" && ext != ".bin")
+    throw InputError(file_or_folder, 0, "unknown scan format (expected .pcd or KITTI .bin)");
+  return {file_or_folder};
+}
+
+int runTool(const char* tool_name, const std::function<int()>& body) {
+  try {
+    return body();
+  } catch (const InputError& e) {
+    pcl::console::print_error("[%s] error: %s\n", tool_name, e.what());
+  } catch (const std::exception& e) {
+    pcl::console::print_error("[%s] error: %s\n", tool_name, e.what());
+  } catch (...) {
+    pcl::console::print_error("[%s] error: unknown failure\n", tool_name);
+  }
+  return 1;
+}
+
+ProgressBar::ProgressBar(std::size_t total, std::string unit, bool force)
+    : total_(total), unit_(std::move(unit)), enabled_(force || isatty(STDERR_FILENO)) {}
+
+void ProgressBar::update(std::size_t done) {
+  if (!enabled_ || total_ == 0) return;
+  const int width = 30;
+  const int filled = static_cast<int>(width * std::min(done, total_) / total_);
+  std::string bar(static_cast<std::size_t>(filled), '=');
+  if (filled < width) bar += '>';
+  bar.resize(width, ' ');
+  std::fprintf(stderr, "\r[%s] %zu/%zu %s", bar.c_str(), done, total_, unit_.c_str());
+  std::fflush(stderr);
+}
+
+void ProgressBar::finish() {
+  if (!enabled_) return;
+  update(total_);
+  std::fprintf(stderr, "\n");
+}
+
+}  // namespace tools
+}  // namespace pcl_movers

@@ -1,0 +1,60 @@
+/*
+ * Shared plumbing of the pcl_movers_* tools (not installed). No global state: every tool passes
+ * what it needs explicitly.
+ * SPDX-License-Identifier: BSD-3-Clause
+ */
+#pragma once
+
+#include <pcl_movers/common.h>
+
+#include <pcl/console/parse.h>
+#include <pcl/console/print.h>
+
+#include <exception>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace pcl_movers {
+namespace tools {
+
+/** \brief True when -h or --help is among the arguments. */
+inline bool wantsHelp(int argc, char** argv) {
+  return pcl::console::find_switch(argc, argv, "-h") ||
+         pcl::console::find_switch(argc, argv, "--help");
+}
+
+/** \brief Rejects any argument starting with '-' that is not in `known` (flags and options,
+ * e.g. {"-h", "--rate", "--overwrite"}) — unknown flags are an error, not silently ignored.
+ * Option values (the argument after an option in `with_value`) are skipped. Negative numbers
+ * given as values are fine. Throws InputError. */
+void checkArguments(int argc, char** argv, const std::vector<std::string>& flags,
+                    const std::vector<std::string>& with_value);
+
+/** \brief Positional arguments (not options nor option values), in order. */
+std::vector<std::string> positionalArguments(int argc, char** argv,
+                                             const std::vector<std::string>& with_value);
+
+/** \brief Input scans of a tool that takes "file or folder": a single .pcd/.bin file, or the
+ * frames of a sequence folder (see io::SequenceReader), sorted numerically. Throws InputError. */
+std::vector<std::string> listScanInputs(const std::string& file_or_folder);
+
+/** \brief Runs `body`, turns exceptions into a clear "[tool] error: ..." and exit code 1. */
+int runTool(const char* tool_name, const std::function<int()>& body);
+
+/** \brief A one-line progress bar on stderr ("[=====>     ] 42/77 frames"), only on a terminal
+ * unless `force`. */
+class ProgressBar {
+ public:
+  ProgressBar(std::size_t total, std::string unit = "frames", bool force = false);
+  void update(std::size_t done);
+  void finish();
+
+ private:
+  std::size_t total_;
+  std::string unit_;
+  bool enabled_;
+};
+
+}  // namespace tools
+}  // namespace pcl_movers

@@ -1,0 +1,81 @@
+/*
+ * SPDX-License-Identifier: BSD-3-Clause
+ */
+#pragma once
+
+#include <pcl/point_cloud.h>
+
+#include <string>
+#include <vector>
+
+namespace pcl_movers {
+
+/** \brief Geometry of a scanning LiDAR: one elevation per beam (row) and the azimuth sampling.
+ *
+ * Rows are ordered top to bottom (row 0 = highest elevation), columns by azimuth. For 360° sensors
+ * column 0 looks backwards (azimuth +π) and azimuth decreases to the right with column index, as in
+ * a range image seen from behind the sensor: column c covers azimuth
+ * `azimuthMax() - (c + 0.5) * azimuthResolution()`. Angles are in radians, sensor frame x forward,
+ * y left, z up.
+ */
+class SensorModel {
+ public:
+  SensorModel() = default;
+  /** \param elevations beam elevations [rad], any order (stored top to bottom)
+   * \param columns azimuth samples over the field of view
+   * \param azimuth_min, azimuth_max horizontal field of view [rad] (-π, π for 360° sensors) */
+  SensorModel(std::vector<float> elevations, int columns, float azimuth_min = -float(M_PI),
+              float azimuth_max = float(M_PI), std::string name = "custom");
+
+  /** \brief Velodyne HDL-64E (KITTI): 64 beams, +2.0° to -24.9°, 2048 columns. */
+  static SensorModel hdl64();
+  /** \brief Velodyne HDL-32E: 32 beams, +10.67° to -30.67°, 2048 columns. */
+  static SensorModel hdl32();
+  /** \brief Velodyne VLP-16: 16 beams, ±15°, 1800 columns. */
+  static SensorModel vlp16();
+  /** \brief Ouster OS1-64: 64 beams, ±16.6° uniform, 2048 columns. */
+  static SensorModel os1_64();
+  /** \brief A 2D-scanning ladar like the paper's: limited field of view (90° × 30°), 60 rows,
+   * 360 columns, ~10 Hz. */
+  static SensorModel ladar2d();
+  /** \brief A preset by name: "hdl64", "hdl32", "vlp16", "os1_64", "ladar2d". Throws InputError. */
+  static SensorModel fromName(const std::string& name);
+
+  /** \brief Estimates the beam layout of a spinning sensor from one unorganized scan: beams are the
+   * modes of the elevation histogram of points (elevations of near points are corrected for the
+   * distance of the laser from the sensor origin by using only points beyond a few metres).
+   * \param num_beams expected beams (0 = detect), \param columns azimuth columns (0 = 2048). */
+  template <typename PointT>
+  static SensorModel estimate(const pcl::PointCloud<PointT>& cloud, int num_beams = 0,
+                              int columns = 0);
+
+  const std::string& name() const { return name_; }
+  int rows() const { return static_cast<int>(elevations_.size()); }
+  int columns() const { return columns_; }
+  /** \brief Beam elevations [rad], top to bottom. */
+  const std::vector<float>& elevations() const { return elevations_; }
+  float azimuthMin() const { return azimuth_min_; }
+  float azimuthMax() const { return azimuth_max_; }
+  float azimuthResolution() const { return (azimuth_max_ - azimuth_min_) / float(columns_); }
+  /** \brief True when the azimuth field of view is a full turn (the range image wraps). */
+  bool isFullRevolution() const;
+  /** \brief Row of the beam nearest to `elevation` [rad], or -1 when further than half a beam
+   * spacing outside the outermost beams. */
+  int rowOf(float elevation) const;
+  /** \brief Column of `azimuth` [rad] (wrapped for 360° sensors), -1 outside the field of view. */
+  int columnOf(float azimuth) const;
+  /** \brief Centre azimuth of column c [rad]. */
+  float azimuthOf(int column) const {
+    return azimuth_max_ - (float(column) + 0.5f) * azimuthResolution();
+  }
+  void setColumns(int columns) { columns_ = columns; }
+
+ private:
+  std::string name_ = "custom";
+  std::vector<float> elevations_;
+  int columns_ = 0;
+  float azimuth_min_ = -float(M_PI);
+  float azimuth_max_ = float(M_PI);
+};
+
+}  // namespace pcl_movers

@@ -1,0 +1,388 @@
+/*
+ * SPDX-License-Identifier: BSD-3-Clause
+ */
+#include <pcl_movers/io/sequence.h>
+
+#include <pcl/PCLPointCloud2.h>
+#include <pcl/conversions.h>
+#include <pcl/io/pcd_io.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+
+namespace fs = std::filesystem;
+
+namespace pcl_movers {
+namespace io {
+namespace {
+
+bool hasExtension(const fs::path& p, const char* ext) {
+  std::string e = p.extension().string();
+  std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return std::tolower(c); });
+  return e == ext;
+}
+
+/** The last run of digits in the file stem, or -1 when there is none. */
+long long frameNumber(const std::string& path) {
+  const std::string stem = fs::path(path).stem().string();
+  long long value = -1;
+  std::size_t i = stem.size();
+  while (i > 0 && !std::isdigit(static_cast<unsigned char>(stem[i - 1]))) --i;
+  std::size_t end = i;
+  while (i > 0 && std::isdigit(static_cast<unsigned char>(stem[i - 1]))) --i;
+  if (end > i) value = std::stoll(stem.substr(i, std::min<std::size_t>(end - i, 18)));
+  return value;
+}
+
+std::vector<std::string> listFiles(const fs::path& folder, const char* ext) {
+  std::vector<std::string> out;
+  std::error_code ec;
+  if (!fs::is_directory(folder, ec)) return out;
+  for (const auto& entry : fs::directory_iterator(folder, ec))
+    if (entry.is_regular_file(ec) && hasExtension(entry.path(), ext))
+      out.push_back(entry.path().string());
+  sortNumerically(out);
+  return out;
+}
+
+bool isIdentityViewpoint(const Eigen::Vector4f& origin, const Eigen::Quaternionf& q) {
+  return origin.head<3>().norm() < 1e-9f && std::abs(std::abs(q.w()) - 1.0f) < 1e-7f;
+}
+
+void readPcdHeader(const std::string& path, pcl::PCLPointCloud2& header, Eigen::Vector4f& origin,
+                   Eigen::Quaternionf& orientation) {
+  pcl::PCDReader reader;
+  int version = 0, data_type = 0;
+  unsigned int data_idx = 0;
+  if (reader.readHeader(path, header, origin, orientation, version, data_type, data_idx) < 0)
+    throw InputError(path, 0, "not a readable PCD file (bad or missing header)");
+}
+
+bool hasField(const pcl::PCLPointCloud2& cloud, const char* name) {
+  return std::any_of(cloud.fields.begin(), cloud.fields.end(),
+                     [&](const pcl::PCLPointField& f) { return f.name == name; });
+}
+
+template <typename PointT>
+void readKittiBin(const std::string& path, pcl::PointCloud<PointT>& cloud) {
+  std::ifstream in(path, std::ios::binary | std::ios::ate);
+  if (!in) throw InputError(path, 0, "cannot open file");
+  const std::streamsize bytes = in.tellg();
+  if (bytes % (4 * sizeof(float)) != 0)
+    throw InputError(path, 0,
+                     "truncated KITTI .bin: size " + std::to_string(bytes) +
+                         " is not a multiple of 16 bytes (x y z reflectance)");
+  in.seekg(0);
+  std::vector<float> raw(static_cast<std::size_t>(bytes) / sizeof(float));
+  if (!in.read(reinterpret_cast<char*>(raw.data()), bytes))
+    throw InputError(path, 0, "could not read the whole file");
+  const std::size_t n = raw.size() / 4;
+  cloud.clear();
+  cloud.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    PointT& p = cloud[i];
+    p.x = raw[4 * i];
+    p.y = raw[4 * i + 1];
+    p.z = raw[4 * i + 2];
+    if constexpr (pcl::traits::has_intensity_v<PointT>) p.intensity = raw[4 * i + 3];
+  }
+  cloud.width = static_cast<std::uint32_t>(n);
+  cloud.height = 1;
+  cloud.is_dense = false;
+  cloud.sensor_origin_ = Eigen::Vector4f(0, 0, 0, 1);
+  cloud.sensor_orientation_ = Eigen::Quaternionf::Identity();
+}
+
+Eigen::Isometry3d isometryFromViewpoint(const Eigen::Vector4f& origin,
+                                        const Eigen::Quaternionf& q) {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.linear() = q.cast<double>().normalized().toRotationMatrix();
+  pose.translation() = origin.head<3>().cast<double>();
+  return pose;
+}
+
+}  // namespace
+
+void sortNumerically(std::vector<std::string>& paths) {
+  std::stable_sort(paths.begin(), paths.end(), [](const std::string& a, const std::string& b) {
+    const long long na = frameNumber(a), nb = frameNumber(b);
+    if (na != nb) return na < nb;
+    return a < b;
+  });
+}
+
+template <typename PointT>
+void readScan(const std::string& path, pcl::PointCloud<PointT>& cloud) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw InputError(path, 0, "file does not exist");
+  if (!fs::is_regular_file(path, ec)) throw InputError(path, 0, "not a regular file");
+  if (hasExtension(path, ".bin")) {
+    readKittiBin(path, cloud);
+    return;
+  }
+  if (!hasExtension(path, ".pcd"))
+    throw InputError(path, 0, "unknown scan format (expected .pcd or KITTI .bin)");
+  pcl::PCLPointCloud2 header;
+  Eigen::Vector4f origin;
+  Eigen::Quaternionf orientation;
+  readPcdHeader(path, header, origin, orientation);
+  for (const char* f : {"x", "y", "z"})
+    if (!hasField(header, f))
+      throw InputError(path, 0, std::string("PCD has no '") + f + "' field");
+  pcl::PCLPointCloud2 blob;
+  pcl::PCDReader reader;
+  int pcd_version = 0;
+  if (reader.read(path, blob, origin, orientation, pcd_version) < 0)
+    throw InputError(path, 0, "could not read PCD data (truncated or malformed file)");
+  if (blob.data.size() < static_cast<std::size_t>(blob.width) * blob.height * blob.point_step)
+    throw InputError(path, 0, "truncated PCD data");
+  if constexpr (pcl::traits::has_intensity_v<PointT>) {
+    if (!hasField(blob, "intensity")) {
+      // A PCD without intensity is still a valid scan: read x y z, intensity 0.
+      pcl::PointCloud<pcl::PointXYZ> xyz;
+      pcl::fromPCLPointCloud2(blob, xyz);
+      cloud.resize(xyz.size());
+      for (std::size_t i = 0; i < xyz.size(); ++i) {
+        cloud[i].x = xyz[i].x;
+        cloud[i].y = xyz[i].y;
+        cloud[i].z = xyz[i].z;
+        cloud[i].intensity = 0.0f;
+      }
+      cloud.width = xyz.width;
+      cloud.height = xyz.height;
+      cloud.is_dense = xyz.is_dense;
+    } else {
+      pcl::fromPCLPointCloud2(blob, cloud);
+    }
+  } else {
+    pcl::fromPCLPointCloud2(blob, cloud);
+  }
+  cloud.sensor_origin_ = origin;
+  cloud.sensor_orientation_ = orientation;
+}
+
+std::vector<Eigen::Isometry3d> readPoses(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path, 0, "cannot open pose file");
+  std::vector<Eigen::Isometry3d> poses;
+  std::string line;
+  std::size_t line_no = 0;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    std::istringstream row(line);
+    double v[12];
+    int count = 0;
+    double x;
+    while (row >> x) {
+      if (count < 12) v[count] = x;
+      ++count;
+    }
+    if (!row.eof() || count != 12)
+      throw InputError(path, line_no,
+                       "expected 12 numbers (row-major 3x4 pose), found " +
+                           (row.eof() ? std::to_string(count) : "a non-number"));
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 4; ++c) pose.matrix()(r, c) = v[4 * r + c];
+    for (double value : v)
+      if (!std::isfinite(value)) throw InputError(path, line_no, "pose has NaN/Inf entries");
+    const Eigen::Matrix3d rtr = pose.linear().transpose() * pose.linear();
+    if ((rtr - Eigen::Matrix3d::Identity()).norm() > 1e-3)
+      throw InputError(path, line_no, "rotation part is not orthonormal");
+    poses.push_back(pose);
+  }
+  return poses;
+}
+
+void writePoses(const std::string& path, const std::vector<Eigen::Isometry3d>& poses) {
+  std::ofstream out(path);
+  if (!out) throw InputError(path, 0, "cannot write pose file");
+  out << std::scientific << std::setprecision(9);
+  for (const auto& pose : poses) {
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 4; ++c) out << pose.matrix()(r, c) << ((r == 2 && c == 3) ? '\n' : ' ');
+  }
+  if (!out) throw InputError(path, 0, "write failed");
+}
+
+std::vector<double> readTimes(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path, 0, "cannot open times file");
+  std::vector<double> times;
+  std::string line;
+  std::size_t line_no = 0;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    std::istringstream row(line);
+    double t;
+    std::string rest;
+    if (!(row >> t) || (row >> rest) || !std::isfinite(t))
+      throw InputError(path, line_no, "expected one timestamp in seconds");
+    if (!times.empty() && t <= times.back())
+      throw InputError(path, line_no,
+                       "timestamps must increase (got " + std::to_string(t) + " after " +
+                           std::to_string(times.back()) + ")");
+    times.push_back(t);
+  }
+  return times;
+}
+
+void writeTimes(const std::string& path, const std::vector<double>& times) {
+  std::ofstream out(path);
+  if (!out) throw InputError(path, 0, "cannot write times file");
+  out << std::fixed << std::setprecision(6);
+  for (double t : times) out << t << '\n';
+  if (!out) throw InputError(path, 0, "write failed");
+}
+
+void SequenceReader::open(const std::string& folder, double rate_hz) {
+  folder_ = folder;
+  frame_paths_.clear();
+  poses_.clear();
+  times_.clear();
+  pose_source_ = "none";
+  has_times_ = false;
+  std::error_code ec;
+  if (!fs::exists(folder, ec)) throw InputError(folder, 0, "sequence folder does not exist");
+  if (!fs::is_directory(folder, ec)) throw InputError(folder, 0, "not a folder");
+  const fs::path root(folder);
+  frame_paths_ = listFiles(root / "frames", ".pcd");
+  if (frame_paths_.empty()) frame_paths_ = listFiles(root, ".pcd");
+  if (frame_paths_.empty()) frame_paths_ = listFiles(root / "velodyne", ".bin");
+  if (frame_paths_.empty())
+    throw InputError(folder, 0, "no frames (expected frames/*.pcd, *.pcd or velodyne/*.bin)");
+
+  const std::string poses_path = (root / "poses.txt").string();
+  if (fs::exists(poses_path, ec)) {
+    poses_ = readPoses(poses_path);
+    if (poses_.size() != frame_paths_.size())
+      throw InputError(poses_path, 0,
+                       "has " + std::to_string(poses_.size()) + " poses but the sequence has " +
+                           std::to_string(frame_paths_.size()) + " frames");
+    pose_source_ = "poses.txt";
+  } else if (hasExtension(frame_paths_.front(), ".pcd")) {
+    pcl::PCLPointCloud2 header;
+    Eigen::Vector4f origin;
+    Eigen::Quaternionf orientation;
+    readPcdHeader(frame_paths_.front(), header, origin, orientation);
+    if (!isIdentityViewpoint(origin, orientation)) {
+      for (const auto& path : frame_paths_) {
+        readPcdHeader(path, header, origin, orientation);
+        poses_.push_back(isometryFromViewpoint(origin, orientation));
+      }
+      pose_source_ = "viewpoint";
+    }
+  }
+
+  const std::string times_path = (root / "times.txt").string();
+  if (fs::exists(times_path, ec)) {
+    times_ = readTimes(times_path);
+    if (times_.size() != frame_paths_.size())
+      throw InputError(times_path, 0,
+                       "has " + std::to_string(times_.size()) +
+                           " timestamps but the sequence has " +
+                           std::to_string(frame_paths_.size()) + " frames");
+    has_times_ = true;
+  } else {
+    if (!(rate_hz > 0.0) || !std::isfinite(rate_hz))
+      throw InputError("rate must be positive, got " + std::to_string(rate_hz));
+    for (std::size_t i = 0; i < frame_paths_.size(); ++i) times_.push_back(double(i) / rate_hz);
+  }
+}
+
+std::string SequenceReader::frameName(std::size_t i) const {
+  return fs::path(frame_paths_.at(i)).stem().string();
+}
+
+Eigen::Isometry3d SequenceReader::pose(std::size_t i) const {
+  if (poses_.empty()) return Eigen::Isometry3d::Identity();
+  return poses_.at(i);
+}
+
+std::string SequenceReader::objectsPath() const {
+  const fs::path p = fs::path(folder_) / "objects.txt";
+  std::error_code ec;
+  return fs::exists(p, ec) ? p.string() : std::string();
+}
+
+std::string SequenceReader::labelPath(std::size_t i) const {
+  const fs::path p = fs::path(folder_) / "labels" / (frameName(i) + ".label");
+  std::error_code ec;
+  return fs::exists(p, ec) ? p.string() : std::string();
+}
+
+bool isMissingOrEmptyDirectory(const std::string& folder) {
+  std::error_code ec;
+  if (!fs::exists(folder, ec)) return true;
+  return fs::is_directory(folder, ec) && fs::is_empty(folder, ec);
+}
+
+void prepareOutputDirectory(const std::string& folder, bool overwrite) {
+  std::error_code ec;
+  if (fs::exists(folder, ec) && !fs::is_directory(folder, ec))
+    throw InputError(folder, 0, "output exists and is not a folder");
+  if (!isMissingOrEmptyDirectory(folder) && !overwrite)
+    throw InputError(folder, 0, "output folder exists and is not empty (use --overwrite)");
+  fs::create_directories(folder, ec);
+  if (ec) throw InputError(folder, 0, "cannot create output folder: " + ec.message());
+  const fs::path probe = fs::path(folder) / ".pcl_movers_write_probe";
+  {
+    std::ofstream out(probe);
+    if (!out) throw InputError(folder, 0, "output folder is not writable");
+  }
+  fs::remove(probe, ec);
+}
+
+SequenceWriter::SequenceWriter(const std::string& folder, bool overwrite) : folder_(folder) {
+  prepareOutputDirectory(folder, overwrite);
+  std::error_code ec;
+  fs::create_directories(framesFolder(), ec);
+  if (ec) throw InputError(framesFolder(), 0, "cannot create folder: " + ec.message());
+}
+
+template <typename PointT>
+std::string SequenceWriter::writeFrame(std::size_t index,
+                                       const pcl::PointCloud<PointT>& cloud) const {
+  std::ostringstream name;
+  name << std::setw(6) << std::setfill('0') << index << ".pcd";
+  const std::string path = (fs::path(framesFolder()) / name.str()).string();
+  // Write under a temporary name and rename, so an interrupted run never leaves a half file.
+  const std::string tmp = path + ".tmp";
+  if (pcl::io::savePCDFileBinary(tmp, cloud) < 0) {
+    std::error_code ec;
+    fs::remove(tmp, ec);
+    throw InputError(path, 0, "cannot write PCD");
+  }
+  fs::rename(tmp, path);
+  return path;
+}
+
+void SequenceWriter::writePoses(const std::vector<Eigen::Isometry3d>& poses) const {
+  io::writePoses((fs::path(folder_) / "poses.txt").string(), poses);
+}
+
+void SequenceWriter::writeTimes(const std::vector<double>& times) const {
+  io::writeTimes((fs::path(folder_) / "times.txt").string(), times);
+}
+
+#define PCL_MOVERS_INSTANTIATE_SEQUENCE_IO(T)                         \
+  template void readScan<T>(const std::string&, pcl::PointCloud<T>&); \
+  template std::string SequenceWriter::writeFrame<T>(std::size_t, const pcl::PointCloud<T>&) const;
+PCL_MOVERS_INSTANTIATE_SEQUENCE_IO(pcl::PointXYZ)
+PCL_MOVERS_INSTANTIATE_SEQUENCE_IO(pcl::PointXYZI)
+PCL_MOVERS_INSTANTIATE_SEQUENCE_IO(pcl::PointXYZL)
+PCL_MOVERS_INSTANTIATE_SEQUENCE_IO(pcl::PointXYZRGB)
+PCL_MOVERS_INSTANTIATE_SEQUENCE_IO(pcl::PointXYZRGBL)
+PCL_MOVERS_INSTANTIATE_SEQUENCE_IO(pcl::PointXYZINormal)
+#undef PCL_MOVERS_INSTANTIATE_SEQUENCE_IO
+
+}  // namespace io
+}  // namespace pcl_movers
