@@ -1,0 +1,257 @@
+/*
+ * pcl_movers_eval — scores a tracks.csv against objects.txt with the paper's metrics
+ * (DESIGN.md "Metrics"): hit % per target, false alarms per frame, detection delay, RMS velocity
+ * error. Prints a Markdown table; optionally a PNG bar chart (like the paper's Figure 8) and JSON.
+ * SPDX-License-Identifier: BSD-3-Clause
+ */
+#include <pcl_movers/eval/detection_metrics.h>
+#include <pcl_movers/io/ground_truth.h>
+#include <pcl_movers/io/sequence.h>
+#include <pcl_movers/io/tracks.h>
+
+#include <pcl/console/parse.h>
+#include <pcl/console/print.h>
+
+#include <vtkImageData.h>
+#include <vtkNew.h>
+#include <vtkPNGWriter.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+
+#include "tool_utils.h"
+
+namespace fs = std::filesystem;
+using pcl_movers::InputError;
+
+namespace {
+
+struct Options {
+  pcl_movers::eval::DetectionMetricsParams metrics;
+  std::string poses_path;
+  std::string times_path;
+  std::string sequence;
+  std::string png_path;
+  std::string json_path;
+  std::string title = "HIT % PER TARGET";
+  bool overwrite = false;
+};
+
+void printHelp(const char* argv0) {
+  const Options d;
+  std::printf(
+      "Usage: %s OBJECTS TRACKS [options]\n"
+      "  Scores mover detections (tracks.csv of pcl_movers_detect) against ground truth\n"
+      "  (objects.txt) with the metrics of DESIGN.md and prints a Markdown table.\n\n"
+      "  A target is a ground-truth track with moving = 1, visible in a frame with >= "
+      "--min-points\n"
+      "  points and its centre within the scored sector. Hit: a mover row of that frame has its\n"
+      "  sensor-frame centroid inside the target's box grown by --grow in length and width.\n"
+      "  False alarm: a mover row in the sector inside no target's grown box (rows on parked,\n"
+      "  non-moving objects are false alarms). Delay: frames from first visibility to first hit.\n"
+      "  Velocity error on hits: with poses, |v_xy(row) - v_xy(ground truth)| where the ground\n"
+      "  truth is a line fit of the world box centres over +-%d frames; without poses,\n"
+      "  | |v_xy(row)| - speed_mps |.\n\n"
+      "Options:\n"
+      "  --sector-deg D   half-width of the scored sector around +x [deg] (default %g; 180 =\n"
+      "                   all around)\n"
+      "  --min-points N   points a target needs to be visible (default %d)\n"
+      "  --grow M         growth of the box length and width [m] (default %g)\n"
+      "  --grow-z M       growth of the box height [m] (default %g)\n"
+      "  --frames N       sequence length for false alarms per frame (default: the sequence's\n"
+      "                   length with --sequence, else the number of distinct frames in\n"
+      "                   OBJECTS and TRACKS, which can only undercount)\n"
+      "  --sequence DIR   sequence folder: its length, poses.txt and times.txt are used\n"
+      "  --poses FILE     sensor->world poses (KITTI format) for velocity vectors\n"
+      "  --times FILE     timestamps per frame (default 10 Hz)\n"
+      "  --png FILE       write a hit-%% per target bar chart\n"
+      "  --title TEXT     chart title (default \"%s\")\n"
+      "  --json FILE      write the scores as JSON\n"
+      "  --overwrite      replace existing --png/--json files\n"
+      "  -h, --help       this help\n",
+      argv0, d.metrics.velocity_half_window, d.metrics.sector_deg, d.metrics.min_points,
+      d.metrics.grow_xy, d.metrics.grow_z, d.title.c_str());
+}
+
+double parseNumber(const std::string& flag, const std::string& text) {
+  std::size_t used = 0;
+  double v = 0;
+  try {
+    v = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != text.size() || !std::isfinite(v))
+    throw InputError(flag + ": expected a number, got '" + text + "'");
+  return v;
+}
+
+int parseCount(const std::string& flag, const std::string& text, int min_value) {
+  const double v = parseNumber(flag, text);
+  if (v != std::floor(v) || v < min_value || v > 1e9)
+    throw InputError(flag + ": expected an integer >= " + std::to_string(min_value) + ", got '" +
+                     text + "'");
+  return static_cast<int>(v);
+}
+
+/** Refuses to replace user files silently; checked before any work so nothing is half done. */
+void checkOutput(const std::string& path, bool overwrite) {
+  if (path.empty()) return;
+  if (fs::exists(path) && !overwrite)
+    throw InputError(path + ": exists; pass --overwrite to replace it");
+  const fs::path parent = fs::path(path).parent_path();
+  if (!parent.empty() && !fs::is_directory(parent))
+    throw InputError(path + ": folder " + parent.string() + " does not exist");
+}
+
+/** Writes via a temporary file and a rename, so an error never leaves a half-written file. */
+template <typename Writer>
+void writeAtomically(const std::string& path, Writer&& write) {
+  const std::string tmp = path + ".tmp-pcl_movers_eval";
+  try {
+    write(tmp);
+    fs::rename(tmp, path);
+  } catch (...) {
+    std::error_code ec;
+    fs::remove(tmp, ec);
+    throw;
+  }
+}
+
+void writeText(const std::string& path, const std::string& text) {
+  writeAtomically(path, [&](const std::string& tmp) {
+    std::ofstream out(tmp);
+    out << text;
+    out.close();
+    if (!out) throw InputError(path + ": cannot write");
+  });
+}
+
+void writePng(const std::string& path, const pcl_movers::eval::DetectionScore& score,
+              const std::string& title) {
+  int w = 0, h = 0;
+  std::vector<unsigned char> rgb;
+  pcl_movers::eval::drawHitChart(score, title, w, h, rgb);
+  vtkNew<vtkImageData> image;
+  image->SetDimensions(w, h, 1);
+  image->AllocateScalars(VTK_UNSIGNED_CHAR, 3);
+  auto* dst = static_cast<unsigned char*>(image->GetScalarPointer());
+  // VTK images start at the bottom row; the chart starts at the top.
+  for (int y = 0; y < h; ++y)
+    std::copy(rgb.begin() + std::size_t(h - 1 - y) * w * 3,
+              rgb.begin() + std::size_t(h - y) * w * 3, dst + std::size_t(y) * w * 3);
+  writeAtomically(path, [&](const std::string& tmp) {
+    vtkNew<vtkPNGWriter> writer;
+    writer->SetFileName(tmp.c_str());
+    writer->SetInputData(image);
+    writer->Write();
+    if (writer->GetErrorCode() != 0 || !fs::exists(tmp) || fs::file_size(tmp) == 0)
+      throw InputError(path + ": cannot write PNG");
+  });
+}
+
+int run(int argc, char** argv) {
+  const std::vector<std::string> with_value = {
+      "--sector-deg", "--min-points", "--grow", "--grow-z", "--frames", "--sequence",
+      "--poses",      "--times",      "--png",  "--title",  "--json"};
+  pcl_movers::tools::checkArguments(argc, argv, {"-h", "--help", "--overwrite"}, with_value);
+  const auto positional = pcl_movers::tools::positionalArguments(argc, argv, with_value);
+  if (positional.size() != 2)
+    throw InputError("expected OBJECTS and TRACKS, got " + std::to_string(positional.size()) +
+                     " file argument(s); see -h");
+
+  Options opt;
+  std::string value;
+  if (pcl::console::parse_argument(argc, argv, "--sector-deg", value) >= 0) {
+    opt.metrics.sector_deg = parseNumber("--sector-deg", value);
+    if (!(opt.metrics.sector_deg > 0 && opt.metrics.sector_deg <= 180))
+      throw InputError("--sector-deg: must be in (0, 180], got '" + value + "'");
+  }
+  if (pcl::console::parse_argument(argc, argv, "--min-points", value) >= 0)
+    opt.metrics.min_points = parseCount("--min-points", value, 0);
+  if (pcl::console::parse_argument(argc, argv, "--grow", value) >= 0) {
+    opt.metrics.grow_xy = parseNumber("--grow", value);
+    if (opt.metrics.grow_xy < 0) throw InputError("--grow: must be >= 0, got '" + value + "'");
+  }
+  if (pcl::console::parse_argument(argc, argv, "--grow-z", value) >= 0) {
+    opt.metrics.grow_z = parseNumber("--grow-z", value);
+    if (opt.metrics.grow_z < 0) throw InputError("--grow-z: must be >= 0, got '" + value + "'");
+  }
+  if (pcl::console::parse_argument(argc, argv, "--frames", value) >= 0)
+    opt.metrics.frames = parseCount("--frames", value, 1);
+  pcl::console::parse_argument(argc, argv, "--sequence", opt.sequence);
+  pcl::console::parse_argument(argc, argv, "--poses", opt.poses_path);
+  pcl::console::parse_argument(argc, argv, "--times", opt.times_path);
+  pcl::console::parse_argument(argc, argv, "--png", opt.png_path);
+  pcl::console::parse_argument(argc, argv, "--json", opt.json_path);
+  pcl::console::parse_argument(argc, argv, "--title", opt.title);
+  opt.overwrite = pcl::console::find_switch(argc, argv, "--overwrite");
+
+  checkOutput(opt.png_path, opt.overwrite);
+  checkOutput(opt.json_path, opt.overwrite);
+  if (!opt.png_path.empty() && opt.png_path == opt.json_path)
+    throw InputError("--png and --json name the same file: " + opt.png_path);
+
+  for (const auto& p : positional)
+    if (!fs::is_regular_file(p)) throw InputError(p + ": no such file");
+  const auto objects = pcl_movers::io::readObjects(positional[0]);
+  const auto tracks = pcl_movers::io::readTracks(positional[1]);
+  if (objects.empty())
+    throw InputError(positional[0] + ": no ground-truth objects; nothing to score against");
+
+  std::vector<Eigen::Isometry3d> poses;
+  std::vector<double> times;
+  if (!opt.sequence.empty()) {
+    pcl_movers::io::SequenceReader seq(opt.sequence);
+    if (seq.empty()) throw InputError(opt.sequence + ": no frames in the sequence folder");
+    if (opt.metrics.frames == 0) opt.metrics.frames = static_cast<int>(seq.size());
+    if (seq.hasPoses()) poses = seq.poses();
+    if (seq.hasTimes()) times = seq.times();
+  }
+  if (!opt.poses_path.empty()) poses = pcl_movers::io::readPoses(opt.poses_path);
+  if (!opt.times_path.empty()) times = pcl_movers::io::readTimes(opt.times_path);
+
+  // Frames referenced by the inputs must exist in the poses/times given, else the run is
+  // inconsistent (wrong sequence); say which file is short instead of scoring garbage.
+  int max_frame = -1;
+  for (const auto& o : objects) max_frame = std::max(max_frame, o.frame);
+  for (const auto& r : tracks) max_frame = std::max(max_frame, r.frame);
+  const std::string poses_name = opt.poses_path.empty() ? opt.sequence + "/poses" : opt.poses_path;
+  const std::string times_name = opt.times_path.empty() ? opt.sequence + "/times" : opt.times_path;
+  if (!poses.empty() && max_frame >= static_cast<int>(poses.size()))
+    throw InputError(poses_name + ": " + std::to_string(poses.size()) +
+                     " poses, but the inputs reach frame " + std::to_string(max_frame));
+  if (!times.empty() && max_frame >= static_cast<int>(times.size()))
+    throw InputError(times_name + ": " + std::to_string(times.size()) +
+                     " times, but the inputs reach frame " + std::to_string(max_frame));
+  if (opt.metrics.frames > 0 && max_frame >= opt.metrics.frames)
+    throw InputError("--frames " + std::to_string(opt.metrics.frames) +
+                     " is fewer than the frames in the inputs (up to " + std::to_string(max_frame) +
+                     ")");
+
+  const auto score = pcl_movers::eval::scoreDetections(objects, tracks, opt.metrics, poses, times);
+  std::cout << pcl_movers::eval::formatMarkdown(score) << std::flush;
+  if (!opt.json_path.empty()) {
+    writeText(opt.json_path, pcl_movers::eval::formatJson(score));
+    pcl::console::print_info("wrote %s\n", opt.json_path.c_str());
+  }
+  if (!opt.png_path.empty()) {
+    writePng(opt.png_path, score, opt.title);
+    pcl::console::print_info("wrote %s\n", opt.png_path.c_str());
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (pcl_movers::tools::wantsHelp(argc, argv)) {
+    printHelp(argv[0]);
+    return 0;
+  }
+  return pcl_movers::tools::runTool("pcl_movers_eval", [&] { return run(argc, argv); });
+}

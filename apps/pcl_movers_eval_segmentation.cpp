@@ -1,0 +1,373 @@
+/*
+ * pcl_movers_eval_segmentation — scores GroundPlaneFilter and RangeImageRegionGrowing against
+ * point-wise labels (SemanticKITTI .label files, or the simulator's labels in the same format)
+ * and prints the result as Markdown tables.
+ * SPDX-License-Identifier: BSD-3-Clause
+ */
+#include <pcl_movers/eval/segmentation_metrics.h>
+#include <pcl_movers/ground_plane_filter.h>
+#include <pcl_movers/io/ground_truth.h>
+#include <pcl_movers/io/sequence.h>
+#include <pcl_movers/range_image_organizer.h>
+#include <pcl_movers/range_image_region_growing.h>
+
+#include <pcl/console/parse.h>
+#include <pcl/console/print.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <limits>
+#include <sstream>
+
+#include "tool_utils.h"
+
+namespace fs = std::filesystem;
+using pcl_movers::InputError;
+using Point = pcl::PointXYZI;
+using Cloud = pcl::PointCloud<Point>;
+
+namespace {
+
+struct Options {
+  // ground
+  float distance = pcl_movers::GroundPlaneFilter<Point>().getDistanceThreshold();
+  float tilt_deg = pcl_movers::GroundPlaneFilter<Point>().getMaxTilt() * 180.f / float(M_PI);
+  float sensor_height = pcl_movers::GroundPlaneFilter<Point>().getSensorHeight();
+  int sectors = pcl_movers::GroundPlaneFilter<Point>().getNumSectors();
+  float baseline = 0.25f;
+  // segmentation
+  float k = pcl_movers::RangeImageRegionGrowing<Point>().getDepthThresholdFactor();
+  float floor = pcl_movers::RangeImageRegionGrowing<Point>().getMinDepthThreshold();
+  int gap = pcl_movers::RangeImageRegionGrowing<Point>().getMaxGap();
+  // scoring
+  int min_points = 30;
+  float min_fraction = 0.8f;
+  std::string sensor = "hdl64";
+  int first = 0, last = std::numeric_limits<int>::max();
+  std::vector<std::string> kitti, sequences;
+};
+
+void printHelp(const char* argv0) {
+  const Options d;
+  std::printf(
+      "Usage: %s [--kitti DIR]... [--sequence DIR]... [options]\n"
+      "  Scores ground removal (GroundPlaneFilter) and object segmentation (RangeImageOrganizer +\n"
+      "  GroundPlaneFilter + RangeImageRegionGrowing) against point-wise labels and prints "
+      "Markdown.\n"
+      "  Ground truth: SemanticKITTI classes road, parking, sidewalk, other-ground, terrain and\n"
+      "  lane-marking are ground; unlabelled/outlier points are not scored. Objects: labelled\n"
+      "  instances with >= --min-points points (things by instance id; trunks and poles split by\n"
+      "  3D connected components); recovered = one cluster holds >= --min-fraction of the object.\n"
+      "  Points the organizer could not place in the range image are not scored for objects.\n\n"
+      "Inputs (at least one):\n"
+      "  --kitti DIR        SemanticKITTI layout: DIR/velodyne/NNNNNN.bin + "
+      "DIR/labels/NNNNNN.label\n"
+      "                     (only frames with a label file are used)\n"
+      "  --sequence DIR     a sequence folder with labels/NNNNNN.label (pcl_movers_simulate "
+      "output)\n"
+      "  --frames A-B       frame index range within each input (default: all)\n"
+      "  --sensor NAME      beam layout used to organize unorganized scans: hdl64, hdl32, vlp16,\n"
+      "                     os1_64, ladar2d (default %s)\n\n"
+      "Ground removal:\n"
+      "  --distance M       ground if within M of the local plane (default %g)\n"
+      "  --tilt-deg D       steepest ground plane (default %g)\n"
+      "  --sensor-height M  sensor height above the ground (default %g)\n"
+      "  --sectors N        azimuth sectors (default %d)\n"
+      "  --baseline M       the height-threshold baseline calls z < -sensor_height + M ground\n"
+      "                     (default %g)\n\n"
+      "Segmentation:\n"
+      "  --k F              depth threshold factor: neighbours join if |dr| <= F * range (default "
+      "%g)\n"
+      "  --floor M          absolute floor of the depth threshold (default %g)\n"
+      "  --gap N            empty cells bridged between neighbours (default %d)\n\n"
+      "Scoring:\n"
+      "  --min-points N     smallest scored instance (default %d)\n"
+      "  --min-fraction F   share of an instance one cluster must hold (default %g)\n"
+      "  -h, --help         this help\n",
+      argv0, d.sensor.c_str(), d.distance, d.tilt_deg, d.sensor_height, d.sectors, d.baseline, d.k,
+      d.floor, d.gap, d.min_points, d.min_fraction);
+}
+
+double parseNumber(const std::string& flag, const std::string& text) {
+  std::size_t used = 0;
+  double v = 0;
+  try {
+    v = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != text.size() || !std::isfinite(v))
+    throw InputError(flag + ": expected a number, got '" + text + "'");
+  return v;
+}
+
+double nonNegative(const std::string& flag, const std::string& text) {
+  const double v = parseNumber(flag, text);
+  if (v < 0) throw InputError(flag + ": must be >= 0, got '" + text + "'");
+  return v;
+}
+
+double positive(const std::string& flag, const std::string& text) {
+  const double v = parseNumber(flag, text);
+  if (!(v > 0)) throw InputError(flag + ": must be > 0, got '" + text + "'");
+  return v;
+}
+
+int integer(const std::string& flag, const std::string& text, int min) {
+  const double v = parseNumber(flag, text);
+  if (v != std::floor(v) || v < min || v > 1e9)
+    throw InputError(flag + ": expected an integer >= " + std::to_string(min) + ", got '" + text +
+                     "'");
+  return static_cast<int>(v);
+}
+
+/** One labelled frame to score. */
+struct Frame {
+  std::string scan, labels;
+};
+
+std::vector<Frame> kittiFrames(const std::string& dir, int first, int last) {
+  if (!fs::is_directory(dir + "/velodyne") || !fs::is_directory(dir + "/labels"))
+    throw InputError(dir, 0, "expected velodyne/ and labels/ folders (SemanticKITTI layout)");
+  std::vector<std::string> labels;
+  for (const auto& e : fs::directory_iterator(dir + "/labels"))
+    if (e.path().extension() == ".label") labels.push_back(e.path().string());
+  pcl_movers::io::sortNumerically(labels);
+  std::vector<Frame> frames;
+  for (std::size_t i = 0; i < labels.size(); ++i) {
+    if (int(i) < first || int(i) > last) continue;
+    const std::string scan = dir + "/velodyne/" + fs::path(labels[i]).stem().string() + ".bin";
+    if (!fs::exists(scan)) throw InputError(labels[i], 0, "no matching scan " + scan);
+    frames.push_back({scan, labels[i]});
+  }
+  if (frames.empty()) throw InputError(dir, 0, "no labelled frames in the requested range");
+  return frames;
+}
+
+std::vector<Frame> sequenceFrames(const std::string& dir, int first, int last) {
+  pcl_movers::io::SequenceReader reader(dir);
+  std::vector<Frame> frames;
+  for (std::size_t i = 0; i < reader.size(); ++i) {
+    if (int(i) < first || int(i) > last) continue;
+    const std::string labels = reader.labelPath(i);
+    if (labels.empty()) continue;
+    frames.push_back({reader.framePaths()[i], labels});
+  }
+  if (frames.empty()) throw InputError(dir, 0, "no frames with labels/NNNNNN.label in range");
+  return frames;
+}
+
+struct Result {
+  std::string name;
+  std::size_t frames = 0, points = 0, unplaced_instance_points = 0, instance_points = 0;
+  pcl_movers::eval::GroundScore ground, baseline;
+  pcl_movers::eval::ObjectScore objects;
+  double ground_ms = 0, organize_ms = 0, segment_ms = 0;
+};
+
+double msSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+void scoreFrame(const Frame& frame, const Options& opt, Result& result) {
+  Cloud::Ptr cloud(new Cloud);
+  pcl_movers::io::readScan(frame.scan, *cloud);
+  const auto labels = pcl_movers::io::readLabels(frame.labels);
+  if (labels.size() != cloud->size())
+    throw InputError(frame.labels, 0,
+                     "has " + std::to_string(labels.size()) + " labels but " + frame.scan +
+                         " has " + std::to_string(cloud->size()) + " points");
+  const std::size_t n = cloud->size();
+  ++result.frames;
+  result.points += n;
+
+  // Ground on the scan as it is (organized or not): the filter needs no range image.
+  pcl_movers::GroundPlaneFilter<Point> ground_filter;
+  ground_filter.setDistanceThreshold(opt.distance);
+  ground_filter.setMaxTilt(opt.tilt_deg * float(M_PI) / 180.f);
+  ground_filter.setSensorHeight(opt.sensor_height);
+  ground_filter.setNumSectors(opt.sectors);
+  ground_filter.setInputCloud(cloud);
+  ground_filter.setNegative(true);
+  pcl::Indices ground;
+  auto t0 = std::chrono::steady_clock::now();
+  ground_filter.filter(ground);
+  result.ground_ms += msSince(t0);
+  std::vector<std::uint8_t> is_ground(n, 0), is_baseline(n, 0);
+  for (const auto i : ground) is_ground[i] = 1;
+  const float z0 = cloud->sensor_origin_.z() - opt.sensor_height + opt.baseline;
+  for (std::size_t i = 0; i < n; ++i) is_baseline[i] = (*cloud)[i].z < z0;
+  const auto truth = pcl_movers::eval::groundTruthFromLabels(labels);
+  result.ground += pcl_movers::eval::scoreGround(truth, is_ground);
+  result.baseline += pcl_movers::eval::scoreGround(truth, is_baseline);
+
+  // Objects: organize (pass-through for organized scans), blank the ground, grow regions.
+  pcl_movers::RangeImageOrganizer<Point> organizer;
+  organizer.setSensorModel(pcl_movers::SensorModel::fromName(opt.sensor));
+  organizer.setInputCloud(cloud);
+  Cloud::Ptr image(new Cloud);
+  t0 = std::chrono::steady_clock::now();
+  organizer.organize(*image);
+  result.organize_ms += msSince(t0);
+  std::vector<int> index_image = organizer.getIndexImage();
+  if (organizer.wasPassThrough() || index_image.size() != image->size()) {
+    index_image.resize(image->size());
+    for (std::size_t i = 0; i < index_image.size(); ++i) index_image[i] = static_cast<int>(i);
+  }
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (std::size_t c = 0; c < image->size(); ++c)
+    if (index_image[c] >= 0 && is_ground[index_image[c]]) {
+      auto& p = (*image)[c];
+      p.x = p.y = p.z = nan;
+    }
+  pcl_movers::RangeImageRegionGrowing<Point> rg;
+  rg.setDepthThresholdFactor(opt.k);
+  rg.setMinDepthThreshold(opt.floor);
+  rg.setMaxGap(opt.gap);
+  rg.setWrapAround(pcl_movers::SensorModel::fromName(opt.sensor).isFullRevolution());
+  rg.setInputCloud(image);
+  std::vector<pcl::PointIndices> clusters;
+  t0 = std::chrono::steady_clock::now();
+  rg.segment(clusters);
+  result.segment_ms += msSince(t0);
+
+  std::vector<int> cluster_of(n, -1);
+  std::vector<std::uint8_t> placed(n, 0);
+  for (std::size_t c = 0; c < index_image.size(); ++c)
+    if (index_image[c] >= 0) placed[index_image[c]] = 1;
+  for (std::size_t k = 0; k < clusters.size(); ++k)
+    for (const auto c : clusters[k].indices)
+      if (index_image[c] >= 0) cluster_of[index_image[c]] = static_cast<int>(k);
+
+  std::vector<Eigen::Vector3f> points(n);
+  for (std::size_t i = 0; i < n; ++i) points[i] = (*cloud)[i].getVector3fMap();
+  const auto instance_of = pcl_movers::eval::instancesFromLabels(labels, points);
+  for (std::size_t i = 0; i < n; ++i)
+    if (instance_of[i] > 0) {
+      ++result.instance_points;
+      result.unplaced_instance_points += !placed[i];
+    }
+  result.objects += pcl_movers::eval::scoreObjects(instance_of, cluster_of, opt.min_points,
+                                                   opt.min_fraction, &placed);
+}
+
+std::string pct(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%.1f %%", 100.0 * v);
+  return buf;
+}
+
+int run(int argc, char** argv) {
+  const std::vector<std::string> with_value = {
+      "--kitti",    "--sequence",      "--frames",     "--sensor",      "--distance",
+      "--tilt-deg", "--sensor-height", "--sectors",    "--baseline",    "--k",
+      "--floor",    "--gap",           "--min-points", "--min-fraction"};
+  pcl_movers::tools::checkArguments(argc, argv, {"-h", "--help"}, with_value);
+  const auto positional = pcl_movers::tools::positionalArguments(argc, argv, with_value);
+  if (!positional.empty())
+    throw InputError("unexpected argument '" + positional.front() +
+                     "' (inputs are given with --kitti / --sequence; see -h)");
+  Options opt;
+  std::string v;
+  if (pcl::console::parse_argument(argc, argv, "--distance", v) >= 0)
+    opt.distance = positive("--distance", v);
+  if (pcl::console::parse_argument(argc, argv, "--tilt-deg", v) >= 0) {
+    opt.tilt_deg = nonNegative("--tilt-deg", v);
+    if (opt.tilt_deg >= 90) throw InputError("--tilt-deg: must be below 90");
+  }
+  if (pcl::console::parse_argument(argc, argv, "--sensor-height", v) >= 0)
+    opt.sensor_height = nonNegative("--sensor-height", v);
+  if (pcl::console::parse_argument(argc, argv, "--sectors", v) >= 0)
+    opt.sectors = integer("--sectors", v, 1);
+  if (pcl::console::parse_argument(argc, argv, "--baseline", v) >= 0)
+    opt.baseline = parseNumber("--baseline", v);
+  if (pcl::console::parse_argument(argc, argv, "--k", v) >= 0) opt.k = nonNegative("--k", v);
+  if (pcl::console::parse_argument(argc, argv, "--floor", v) >= 0)
+    opt.floor = nonNegative("--floor", v);
+  if (pcl::console::parse_argument(argc, argv, "--gap", v) >= 0) opt.gap = integer("--gap", v, 0);
+  if (pcl::console::parse_argument(argc, argv, "--min-points", v) >= 0)
+    opt.min_points = integer("--min-points", v, 1);
+  if (pcl::console::parse_argument(argc, argv, "--min-fraction", v) >= 0) {
+    opt.min_fraction = positive("--min-fraction", v);
+    if (opt.min_fraction > 1) throw InputError("--min-fraction: must be <= 1");
+  }
+  if (pcl::console::parse_argument(argc, argv, "--sensor", v) >= 0) opt.sensor = v;
+  pcl_movers::SensorModel::fromName(opt.sensor);  // throws on an unknown name
+  if (pcl::console::parse_argument(argc, argv, "--frames", v) >= 0) {
+    const auto dash = v.find('-');
+    if (dash == std::string::npos) {
+      opt.first = opt.last = integer("--frames", v, 0);
+    } else {
+      opt.first = integer("--frames", v.substr(0, dash), 0);
+      opt.last = integer("--frames", v.substr(dash + 1), 0);
+    }
+    if (opt.last < opt.first) throw InputError("--frames: empty range '" + v + "'");
+  }
+  for (int i = 1; i + 1 < argc; ++i) {
+    if (std::string(argv[i]) == "--kitti")
+      opt.kitti.push_back(argv[++i]);
+    else if (std::string(argv[i]) == "--sequence")
+      opt.sequences.push_back(argv[++i]);
+  }
+  if (opt.kitti.empty() && opt.sequences.empty())
+    throw InputError("no input: give --kitti DIR and/or --sequence DIR (see -h)");
+
+  std::vector<Result> results;
+  auto evaluate = [&](const std::string& dir, const std::vector<Frame>& frames) {
+    Result r;
+    r.name = fs::path(dir).filename().string();
+    if (r.name.empty()) r.name = fs::path(dir).parent_path().filename().string();
+    for (const auto& f : frames) scoreFrame(f, opt, r);
+    results.push_back(r);
+  };
+  for (const auto& dir : opt.kitti) evaluate(dir, kittiFrames(dir, opt.first, opt.last));
+  for (const auto& dir : opt.sequences) evaluate(dir, sequenceFrames(dir, opt.first, opt.last));
+
+  std::printf(
+      "Ground: GroundPlaneFilter (distance %g m, tilt %g°, %d sectors) vs. a height threshold "
+      "z < %g m. Objects: ground removed, RangeImageRegionGrowing (k = %g, floor %g m, gap %d); "
+      "instances with >= %d points, recovered = one cluster holds >= %g %% of them.\n\n",
+      opt.distance, opt.tilt_deg, opt.sectors, -opt.sensor_height + opt.baseline, opt.k, opt.floor,
+      opt.gap, opt.min_points, 100.0 * opt.min_fraction);
+  std::printf(
+      "| data | frames | ground precision | ground recall | baseline precision | baseline recall "
+      "|\n|---|---|---|---|---|---|\n");
+  for (const auto& r : results)
+    std::printf("| %s | %zu | %s | %s | %s | %s |\n", r.name.c_str(), r.frames,
+                pct(r.ground.precision()).c_str(), pct(r.ground.recall()).c_str(),
+                pct(r.baseline.precision()).c_str(), pct(r.baseline.recall()).c_str());
+  std::printf(
+      "\n| data | instances | recovered | recovered, not merged | over-segmented | "
+      "under-segmented (merged) | missed | instance points not in the range image |\n"
+      "|---|---|---|---|---|---|---|---|\n");
+  for (const auto& r : results) {
+    const auto& o = r.objects;
+    std::printf("| %s | %zu | %s | %s | %s | %s | %s | %s |\n", r.name.c_str(), o.instances,
+                pct(o.rate(o.recovered)).c_str(), pct(o.rate(o.clean)).c_str(),
+                pct(o.rate(o.over_segmented)).c_str(), pct(o.rate(o.under_segmented)).c_str(),
+                pct(o.rate(o.missed)).c_str(),
+                pct(r.instance_points ? double(r.unplaced_instance_points) / r.instance_points : 0)
+                    .c_str());
+  }
+  std::printf(
+      "\n| data | points/frame | ground ms/frame | organize ms/frame | segment ms/frame |\n"
+      "|---|---|---|---|---|\n");
+  for (const auto& r : results)
+    std::printf("| %s | %zu | %.2f | %.2f | %.2f |\n", r.name.c_str(),
+                r.frames ? r.points / r.frames : 0, r.ground_ms / r.frames,
+                r.organize_ms / r.frames, r.segment_ms / r.frames);
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (pcl_movers::tools::wantsHelp(argc, argv)) {
+    printHelp(argv[0]);
+    return 0;
+  }
+  return pcl_movers::tools::runTool("pcl_movers_eval_segmentation",
+                                    [&] { return run(argc, argv); });
+}

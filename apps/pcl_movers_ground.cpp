@@ -1,0 +1,264 @@
+/*
+ * pcl_movers_ground — ground removal (GroundPlaneFilter) on a scan or a folder of scans.
+ * SPDX-License-Identifier: BSD-3-Clause
+ */
+#include <pcl_movers/ground_plane_filter.h>
+#include <pcl_movers/io/sequence.h>
+
+#include <pcl/console/parse.h>
+#include <pcl/console/print.h>
+#include <pcl/conversions.h>
+#include <pcl/io/pcd_io.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <functional>
+
+#include "tool_utils.h"
+
+namespace fs = std::filesystem;
+using pcl_movers::InputError;
+using Point = pcl::PointXYZI;
+using Cloud = pcl::PointCloud<Point>;
+
+namespace {
+
+struct Options {
+  float distance = pcl_movers::GroundPlaneFilter<Point>().getDistanceThreshold();
+  float tilt_deg = pcl_movers::GroundPlaneFilter<Point>().getMaxTilt() * 180.f / float(M_PI);
+  float sensor_height = pcl_movers::GroundPlaneFilter<Point>().getSensorHeight();
+  int sectors = pcl_movers::GroundPlaneFilter<Point>().getNumSectors();
+  std::string mode = "label";
+  bool overwrite = false;
+};
+
+void printHelp(const char* argv0) {
+  const Options d;
+  std::printf(
+      "Usage: %s INPUT OUTPUT [options]\n"
+      "  Finds the ground of LiDAR scans with local, roughly horizontal planes fitted by RANSAC "
+      "in\n"
+      "  polar cells (pcl_movers::GroundPlaneFilter). INPUT is a .pcd or KITTI .bin scan, or a\n"
+      "  sequence folder (frames/*.pcd, *.pcd or velodyne/*.bin); OUTPUT is then a .pcd file, or "
+      "a\n"
+      "  folder that receives one NNNNNN.pcd per frame. Points are in the sensor frame (z up); "
+      "the\n"
+      "  PCD VIEWPOINT origin is taken as the sensor position. Organized and unorganized scans "
+      "work.\n\n"
+      "Output (--mode):\n"
+      "  label      (default) every input point in the input's order and layout, fields of the\n"
+      "             input plus `label` (uint32): 1 = ground, 0 = not ground or invalid (NaN)\n"
+      "  nonground  only the non-ground points (organized input stays organized, NaN elsewhere)\n"
+      "  ground     only the ground points (same layout rule)\n\n"
+      "Options:\n"
+      "  --mode M           label, nonground or ground (default %s)\n"
+      "  --distance M       ground if within M metres of its cell's plane (default %g)\n"
+      "  --tilt-deg D       steepest plane taken for ground [deg] (default %g)\n"
+      "  --sensor-height M  sensor height above the ground under it [m] (default %g)\n"
+      "  --sectors N        azimuth sectors of the polar cells (default %d)\n"
+      "  --overwrite        replace existing output files\n"
+      "  -h, --help         this help\n",
+      argv0, d.mode.c_str(), d.distance, d.tilt_deg, d.sensor_height, d.sectors);
+}
+
+double parseNumber(const std::string& flag, const std::string& text) {
+  std::size_t used = 0;
+  double v = 0;
+  try {
+    v = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != text.size() || !std::isfinite(v))
+    throw InputError(flag + ": expected a number, got '" + text + "'");
+  return v;
+}
+
+/** Reads a scan and rejects what cannot be processed, naming the file and the problem. */
+Cloud::Ptr readChecked(const std::string& path) {
+  Cloud::Ptr cloud(new Cloud);
+  pcl_movers::io::readScan(path, *cloud);
+  if (cloud->empty()) throw InputError(path, 0, "the cloud is empty");
+  std::size_t finite = 0, nan = 0;
+  for (std::size_t i = 0; i < cloud->size(); ++i) {
+    const auto& p = (*cloud)[i];
+    if (std::isinf(p.x) || std::isinf(p.y) || std::isinf(p.z))
+      throw InputError(path, 0, "point " + std::to_string(i) + " has an infinite coordinate");
+    if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))
+      ++finite;
+    else
+      ++nan;
+  }
+  if (finite == 0) throw InputError(path, 0, "no finite point (all NaN)");
+  if (nan > 0 && !cloud->isOrganized())
+    pcl::console::print_warn("%s: %zu NaN point(s) in an unorganized cloud are left out\n",
+                             path.c_str(), nan);
+  return cloud;
+}
+
+/** x y z intensity label (uint32), in the input's order and layout. */
+void labelledBlob(const Cloud& cloud, const std::vector<std::uint32_t>& labels,
+                  pcl::PCLPointCloud2& blob) {
+  blob = pcl::PCLPointCloud2();
+  blob.header = cloud.header;
+  blob.width = cloud.width;
+  blob.height = cloud.height;
+  blob.is_dense = cloud.is_dense;
+  const char* names[] = {"x", "y", "z", "intensity", "label"};
+  for (int f = 0; f < 5; ++f) {
+    pcl::PCLPointField field;
+    field.name = names[f];
+    field.offset = 4 * f;
+    field.datatype = f < 4 ? pcl::PCLPointField::FLOAT32 : pcl::PCLPointField::UINT32;
+    field.count = 1;
+    blob.fields.push_back(field);
+  }
+  blob.point_step = 20;
+  blob.row_step = blob.point_step * blob.width;
+  blob.data.resize(std::size_t(blob.point_step) * cloud.size());
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    std::uint8_t* dst = &blob.data[i * blob.point_step];
+    const float xyzi[4] = {cloud[i].x, cloud[i].y, cloud[i].z, cloud[i].intensity};
+    std::memcpy(dst, xyzi, sizeof(xyzi));
+    std::memcpy(dst + 16, &labels[i], sizeof(std::uint32_t));
+  }
+}
+
+/** Writes binary PCD next to the target, then renames: no half-written file on failure. */
+void writeAtomically(const std::string& path,
+                     const std::function<int(pcl::PCDWriter&, const std::string&)>& write) {
+  const std::string tmp = path + ".tmp";
+  pcl::PCDWriter writer;
+  if (write(writer, tmp) != 0) {
+    std::error_code ec;
+    fs::remove(tmp, ec);
+    throw InputError(path, 0, "cannot write");
+  }
+  std::error_code ec;
+  fs::rename(tmp, path, ec);
+  if (ec) {
+    fs::remove(tmp, ec);
+    throw InputError(path, 0, "cannot write (" + ec.message() + ")");
+  }
+}
+
+void processOne(const std::string& in, const std::string& out, const Options& opt,
+                std::size_t& selected_total, std::size_t& points_total, double& ms_total) {
+  const Cloud::Ptr cloud = readChecked(in);
+  // extract_removed_indices = true: keep-organized output needs them (PCL warns otherwise).
+  pcl_movers::GroundPlaneFilter<Point> filter(true);
+  filter.setDistanceThreshold(opt.distance);
+  filter.setMaxTilt(opt.tilt_deg * float(M_PI) / 180.f);
+  filter.setSensorHeight(opt.sensor_height);
+  filter.setNumSectors(opt.sectors);
+  filter.setInputCloud(cloud);
+  pcl::PCLPointCloud2 blob;
+  const auto t0 = std::chrono::steady_clock::now();
+  if (opt.mode == "label") {
+    filter.setNegative(true);
+    pcl::Indices ground;
+    filter.filter(ground);
+    ms_total +=
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    selected_total += ground.size();
+    std::vector<std::uint32_t> labels(cloud->size(), 0);
+    for (const auto i : ground) labels[i] = 1;
+    labelledBlob(*cloud, labels, blob);
+  } else {
+    filter.setNegative(opt.mode == "ground");
+    filter.setKeepOrganized(cloud->isOrganized());
+    Cloud result;
+    filter.filter(result);
+    ms_total +=
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    std::size_t finite = 0;
+    for (const auto& p : result) finite += std::isfinite(p.x);
+    selected_total += finite;
+    points_total += cloud->size();
+    writeAtomically(out, [&](pcl::PCDWriter& w, const std::string& path) {
+      return w.writeBinary(path, result);
+    });
+    return;
+  }
+  points_total += cloud->size();
+  writeAtomically(out, [&](pcl::PCDWriter& w, const std::string& path) {
+    return w.writeBinary(path, blob, cloud->sensor_origin_, cloud->sensor_orientation_);
+  });
+}
+
+int run(int argc, char** argv) {
+  const std::vector<std::string> with_value = {"--mode", "--distance", "--tilt-deg",
+                                               "--sensor-height", "--sectors"};
+  pcl_movers::tools::checkArguments(argc, argv, {"-h", "--help", "--overwrite"}, with_value);
+  const auto positional = pcl_movers::tools::positionalArguments(argc, argv, with_value);
+  if (positional.size() != 2)
+    throw InputError("expected INPUT and OUTPUT, got " + std::to_string(positional.size()) +
+                     " argument(s); see -h");
+  Options opt;
+  opt.overwrite = pcl::console::find_switch(argc, argv, "--overwrite");
+  std::string v;
+  if (pcl::console::parse_argument(argc, argv, "--mode", v) >= 0) {
+    if (v != "label" && v != "nonground" && v != "ground")
+      throw InputError("--mode: expected label, nonground or ground, got '" + v + "'");
+    opt.mode = v;
+  }
+  if (pcl::console::parse_argument(argc, argv, "--distance", v) >= 0) {
+    opt.distance = static_cast<float>(parseNumber("--distance", v));
+    if (!(opt.distance > 0)) throw InputError("--distance: must be > 0, got '" + v + "'");
+  }
+  if (pcl::console::parse_argument(argc, argv, "--tilt-deg", v) >= 0) {
+    opt.tilt_deg = static_cast<float>(parseNumber("--tilt-deg", v));
+    if (opt.tilt_deg < 0 || opt.tilt_deg >= 90)
+      throw InputError("--tilt-deg: must be in [0, 90), got '" + v + "'");
+  }
+  if (pcl::console::parse_argument(argc, argv, "--sensor-height", v) >= 0)
+    opt.sensor_height = static_cast<float>(parseNumber("--sensor-height", v));
+  if (pcl::console::parse_argument(argc, argv, "--sectors", v) >= 0) {
+    const double s = parseNumber("--sectors", v);
+    if (s < 1 || s > 4096 || s != std::floor(s))
+      throw InputError("--sectors: expected an integer in 1..4096, got '" + v + "'");
+    opt.sectors = static_cast<int>(s);
+  }
+
+  const std::string& input = positional[0];
+  const std::string& output = positional[1];
+  const auto inputs = pcl_movers::tools::listScanInputs(input);
+  std::vector<std::string> outputs;
+  if (fs::is_directory(input)) {
+    pcl_movers::io::prepareOutputDirectory(output, opt.overwrite);
+    for (const auto& path : inputs)
+      outputs.push_back((fs::path(output) / fs::path(path).stem()).string() + ".pcd");
+  } else {
+    if (fs::is_directory(output))
+      throw InputError(output, 0, "is a folder; give an output .pcd file for a single scan");
+    if (fs::exists(output) && !opt.overwrite)
+      throw InputError(output, 0, "exists (use --overwrite to replace it)");
+    outputs.push_back(output);
+  }
+  std::size_t ground = 0, points = 0;
+  double ms = 0;
+  pcl_movers::tools::ProgressBar bar(inputs.size());
+  for (std::size_t i = 0; i < inputs.size(); ++i) {
+    processOne(inputs[i], outputs[i], opt, ground, points, ms);
+    bar.update(i + 1);
+  }
+  bar.finish();
+  pcl::console::print_info("%zu scan(s), %zu points, %zu %s, %.2f ms per scan -> %s\n",
+                           inputs.size(), points, ground,
+                           opt.mode == "nonground" ? "non-ground" : "ground",
+                           ms / double(inputs.size()), output.c_str());
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (pcl_movers::tools::wantsHelp(argc, argv)) {
+    printHelp(argv[0]);
+    return 0;
+  }
+  return pcl_movers::tools::runTool("pcl_movers_ground", [&] { return run(argc, argv); });
+}

@@ -1,0 +1,739 @@
+/*
+ * pcl_movers_viewer — VTK playback of a LiDAR sequence with the detector's tracks: points coloured
+ * by class and track, oriented boxes, velocity arrows, trails, a text overlay and optional ground
+ * truth; or off-screen rendering of PNG screenshots for documentation and tests.
+ *
+ * Scene geometry and colours come from pcl_movers/viz/scene_style.h (core library, unit-tested);
+ * this file only owns the VTK side: actors, camera, keys, image capture.
+ * SPDX-License-Identifier: BSD-3-Clause
+ */
+#include <pcl_movers/io/ground_truth.h>
+#include <pcl_movers/io/sequence.h>
+#include <pcl_movers/io/tracks.h>
+#include <pcl_movers/viz/scene_style.h>
+
+#include "tool_utils.h"
+
+#include <pcl/PCLPointCloud2.h>
+#include <pcl/conversions.h>
+#include <pcl/io/pcd_io.h>
+#include <pcl/visualization/interactor_style.h>
+#include <pcl/visualization/pcl_visualizer.h>
+
+#include <vtkActor.h>
+#include <vtkCamera.h>
+#include <vtkCellArray.h>
+#include <vtkImageData.h>
+#include <vtkObjectFactory.h>
+#include <vtkPNGWriter.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkPolyData.h>
+#include <vtkPolyDataMapper.h>
+#include <vtkProperty.h>
+#include <vtkRenderWindow.h>
+#include <vtkRenderWindowInteractor.h>
+#include <vtkRenderer.h>
+#include <vtkRendererCollection.h>
+#include <vtkSmartPointer.h>
+#include <vtkUnsignedCharArray.h>
+#include <vtkWindowToImageFilter.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace fs = std::filesystem;
+using pcl::console::print_error;
+using pcl::console::print_info;
+using pcl::console::print_warn;
+
+namespace pcl_movers {
+namespace {
+
+constexpr const char* kTool = "pcl_movers_viewer";
+
+/** Every option with its default; the help text is generated from a default-constructed instance
+ * so it cannot drift from what the tool does. */
+struct ViewerParameters {
+  std::string detections;      ///< --detections DIR (pcl_movers_detect output)
+  bool ground_truth = false;   ///< --ground-truth: draw objects.txt boxes
+  std::string screenshot_dir;  ///< --screenshot-dir DIR: off-screen mode
+  std::string frames;          ///< --frames A:B (inclusive, empty = all)
+  std::string size = "1280x720";
+  std::string camera = "chase";
+  std::string format = "png";  ///< png or ppm (binary P6, for tools without a PNG decoder)
+  double point_size = 2.0;
+  int trail = 10;              ///< trail length [frames]
+  double arrow_seconds = 1.0;  ///< velocity arrows reach where the object will be after this
+  double rate = 10.0;          ///< frame rate when the sequence has no times.txt [Hz]
+  bool overwrite = false;
+};
+
+const std::vector<std::string> kFlags = {"-h", "--help", "--ground-truth", "--overwrite"};
+const std::vector<std::string> kWithValue = {
+    "--detections", "--screenshot-dir", "--frames", "--size",          "--camera",
+    "--format",     "--point-size",     "--trail",  "--arrow-seconds", "--rate"};
+
+void printHelp(const char* program) {
+  const ViewerParameters d;
+  std::printf(
+      "Usage: %s SEQUENCE [options]\n\n"
+      "Plays a LiDAR sequence folder (frames/*.pcd, *.pcd or velodyne/*.bin; poses.txt, "
+      "times.txt,\n"
+      "objects.txt optional) with the tracks of pcl_movers_detect, or renders PNG screenshots.\n\n"
+      "Options:\n"
+      "  --detections DIR      pcl_movers_detect output: DIR/tracks.csv (boxes, arrows, trails) "
+      "and\n"
+      "                        DIR/labelled/*.pcd if present (point classes); else points inside "
+      "a\n"
+      "                        track's box take its colour\n"
+      "  --ground-truth        also draw the ground-truth boxes of SEQUENCE/objects.txt (green)\n"
+      "  --frames A:B          frames to show or render, 0-based inclusive; A:, :B, A also work\n"
+      "                        (default: all)\n"
+      "  --camera NAME         chase or bird (default: %s)\n"
+      "  --point-size PX       point size in pixels (default: %g)\n"
+      "  --trail N             trail length in frames, 0 = none (default: %d)\n"
+      "  --arrow-seconds S     velocity arrows end where the object is S seconds later (default: "
+      "%g)\n"
+      "  --rate HZ             frame rate when there is no times.txt (default: %g)\n"
+      "  --size WxH            window / image size in pixels (default: %s)\n"
+      "Off-screen mode (no window; works under xvfb-run):\n"
+      "  --screenshot-dir DIR  render the frames to DIR/NNNNNN.png and exit\n"
+      "  --format png|ppm      image format (default: %s)\n"
+      "  --overwrite           allow writing into a non-empty DIR\n\n"
+      "Keys (interactive mode):\n"
+      "  space                 play / pause\n"
+      "  right, n / left, p    step one frame forward / back\n"
+      "  + / -                 play faster / slower (x2 / x0.5)\n"
+      "  1 / 2 / 3             camera: chase / bird's-eye / free (mouse)\n"
+      "  tab                   select the next track (movers first); its speed is shown\n"
+      "  s                     save a screenshot (viewer_NNNNNN.png in the current folder)\n"
+      "  q                     quit\n\n"
+      "Colours: ground dark grey, movers red with orange boxes, arrows and trails; stationary\n"
+      "tracks in cool per-track colours; other points grey by height; ground truth green;\n"
+      "the selected track yellow.\n",
+      program, d.camera.c_str(), d.point_size, d.trail, d.arrow_seconds, d.rate, d.size.c_str(),
+      d.format.c_str());
+}
+
+double parseNumber(const std::string& option, const std::string& text, double lo, double hi) {
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (text.empty() || end != text.c_str() + text.size() || !std::isfinite(v) || v < lo || v > hi) {
+    std::ostringstream s;
+    s << option << " " << text << ": expected a number between " << lo << " and " << hi;
+    throw InputError(s.str());
+  }
+  return v;
+}
+
+ViewerParameters parseParameters(int argc, char** argv, std::string& sequence) {
+  tools::checkArguments(argc, argv, kFlags, kWithValue);
+  const auto positional = tools::positionalArguments(argc, argv, kWithValue);
+  if (positional.size() != 1)
+    throw InputError("expected exactly one SEQUENCE folder, got " +
+                     std::to_string(positional.size()) + " (see -h)");
+  sequence = positional.front();
+  ViewerParameters p;
+  // The last occurrence wins, as with pcl::console::parse_argument.
+  auto value = [&](const char* option, std::string& out) {
+    bool found = false;
+    for (int i = 1; i < argc; ++i)
+      if (option == std::string(argv[i])) {
+        if (i + 1 >= argc) throw InputError(std::string(option) + ": missing value");
+        out = argv[i + 1];
+        found = true;
+      }
+    return found;
+  };
+  value("--detections", p.detections);
+  value("--screenshot-dir", p.screenshot_dir);
+  value("--frames", p.frames);
+  value("--size", p.size);
+  value("--camera", p.camera);
+  value("--format", p.format);
+  std::string v;
+  if (value("--point-size", v)) p.point_size = parseNumber("--point-size", v, 1, 20);
+  if (value("--trail", v)) p.trail = static_cast<int>(parseNumber("--trail", v, 0, 1000));
+  if (value("--arrow-seconds", v)) p.arrow_seconds = parseNumber("--arrow-seconds", v, 0, 60);
+  if (value("--rate", v)) p.rate = parseNumber("--rate", v, 0.01, 1000);
+  p.ground_truth = pcl::console::find_switch(argc, argv, "--ground-truth");
+  p.overwrite = pcl::console::find_switch(argc, argv, "--overwrite");
+  if (p.format != "png" && p.format != "ppm")
+    throw InputError("--format " + p.format + ": use png or ppm");
+  if (!p.screenshot_dir.empty() && p.screenshot_dir == sequence)
+    throw InputError("--screenshot-dir must not be the SEQUENCE folder");
+  return p;
+}
+
+/** Per-point classes and track ids stored in a labelled cloud of pcl_movers_detect. Field names are
+ * matched loosely so small naming differences in the detector's output do not break the viewer. */
+bool readLabelledCloud(const std::string& path, pcl::PointCloud<pcl::PointXYZI>& cloud,
+                       viz::PointLabels& labels) {
+  pcl::PCLPointCloud2 blob;
+  if (pcl::io::loadPCDFile(path, blob) < 0)
+    throw InputError(path, 0, "not a readable labelled PCD file");
+  auto find = [&](std::initializer_list<const char*> names) -> const pcl::PCLPointField* {
+    for (const char* n : names)
+      for (const auto& f : blob.fields)
+        if (f.name == n) return &f;
+    return nullptr;
+  };
+  const auto* fx = find({"x"});
+  const auto* fcls = find({"class", "point_class", "label"});
+  const auto* ftrack = find({"track_id", "track", "object", "instance"});
+  if (!fx || (!fcls && !ftrack))
+    throw InputError(path, 0, "labelled PCD needs x y z and a class or track_id field");
+  pcl::fromPCLPointCloud2(blob, cloud);  // missing intensity stays 0
+  auto value = [&](const pcl::PCLPointField* f, std::size_t i) -> double {
+    const std::uint8_t* p = blob.data.data() + i * blob.point_step + f->offset;
+    switch (f->datatype) {
+      case pcl::PCLPointField::INT8:
+        return *reinterpret_cast<const std::int8_t*>(p);
+      case pcl::PCLPointField::UINT8:
+        return *p;
+      case pcl::PCLPointField::INT16: {
+        std::int16_t v;
+        std::memcpy(&v, p, 2);
+        return v;
+      }
+      case pcl::PCLPointField::UINT16: {
+        std::uint16_t v;
+        std::memcpy(&v, p, 2);
+        return v;
+      }
+      case pcl::PCLPointField::INT32: {
+        std::int32_t v;
+        std::memcpy(&v, p, 4);
+        return v;
+      }
+      case pcl::PCLPointField::UINT32: {
+        std::uint32_t v;
+        std::memcpy(&v, p, 4);
+        return v;
+      }
+      case pcl::PCLPointField::FLOAT32: {
+        float v;
+        std::memcpy(&v, p, 4);
+        return v;
+      }
+      case pcl::PCLPointField::FLOAT64: {
+        double v;
+        std::memcpy(&v, p, 8);
+        return v;
+      }
+      default:
+        return 0;
+    }
+  };
+  const std::size_t n = cloud.size();
+  labels.classes.assign(n, viz::PointClass::Unassigned);
+  labels.track_ids.assign(n, -1);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (fcls) {
+      const int c = static_cast<int>(std::lround(value(fcls, i)));
+      if (c >= 0 && c <= 3) labels.classes[i] = static_cast<viz::PointClass>(c);
+    }
+    if (ftrack) {
+      const double t = value(ftrack, i);
+      labels.track_ids[i] = std::isfinite(t) && t >= 0 ? static_cast<int>(std::lround(t)) : -1;
+    }
+  }
+  return true;
+}
+
+/** Everything the viewer shows, loaded and validated before any window opens. */
+struct SceneData {
+  io::SequenceReader reader;
+  viz::TrackIndex tracks;
+  bool has_tracks = false;
+  std::string labelled_dir;
+  std::map<int, std::vector<io::GroundTruthObject>> ground_truth;
+  bool has_ground_truth = false;
+};
+
+void loadScene(const std::string& sequence, const ViewerParameters& p, SceneData& scene) {
+  std::error_code ec;
+  if (!fs::exists(sequence, ec)) throw InputError(sequence, 0, "no such sequence folder");
+  if (!fs::is_directory(sequence, ec)) throw InputError(sequence, 0, "not a folder");
+  scene.reader.open(sequence, p.rate);
+  if (scene.reader.empty())
+    throw InputError(sequence, 0,
+                     "no frames (expected frames/*.pcd, *.pcd or velodyne/*.bin in the folder)");
+  const std::size_t n = scene.reader.size();
+  if (!p.detections.empty()) {
+    if (!fs::is_directory(p.detections, ec))
+      throw InputError(p.detections, 0, "--detections: no such folder");
+    const std::string csv = (fs::path(p.detections) / "tracks.csv").string();
+    if (!fs::is_regular_file(csv, ec))
+      throw InputError(csv, 0, "missing (is --detections a pcl_movers_detect output folder?)");
+    auto rows = io::readTracks(csv);
+    for (const auto& r : rows)
+      if (r.frame < 0 || static_cast<std::size_t>(r.frame) >= n)
+        throw InputError(csv, 0,
+                         "row for frame " + std::to_string(r.frame) + " but " + sequence + " has " +
+                             std::to_string(n) + " frames: detections of another sequence?");
+    scene.tracks = viz::TrackIndex(std::move(rows));
+    scene.has_tracks = true;
+    const fs::path labelled = fs::path(p.detections) / "labelled";
+    if (fs::is_directory(labelled, ec)) scene.labelled_dir = labelled.string();
+  }
+  if (p.ground_truth) {
+    const std::string path = scene.reader.objectsPath();
+    if (path.empty())
+      throw InputError(sequence, 0, "--ground-truth: the sequence has no objects.txt");
+    for (auto& o : io::readObjects(path)) {
+      if (o.frame < 0 || static_cast<std::size_t>(o.frame) >= n)
+        throw InputError(path, 0,
+                         "object in frame " + std::to_string(o.frame) + " but the sequence has " +
+                             std::to_string(n) + " frames");
+      scene.ground_truth[o.frame].push_back(std::move(o));
+    }
+    scene.has_ground_truth = true;
+  }
+}
+
+/** Per-key behaviour without PCLVisualizer's own bindings for the same keys (its '1' recolours
+ * clouds, 's' switches to surfaces, 'p' to points, '+'/'-' change point size), which would fight
+ * with ours. Keys we do not use keep PCL's behaviour (mouse, 'r' reset, 'q' quit, ...). */
+class ViewerInteractorStyle : public pcl::visualization::PCLVisualizerInteractorStyle {
+ public:
+  static ViewerInteractorStyle* New();
+  vtkTypeMacro(ViewerInteractorStyle, pcl::visualization::PCLVisualizerInteractorStyle);
+  /** Returns true when the key was handled. */
+  std::function<bool(const std::string& keysym, char code)> handler;
+
+ protected:
+  void OnKeyDown() override {
+    if (handler && Interactor && handler(safeKeySym(), Interactor->GetKeyCode())) return;
+    pcl::visualization::PCLVisualizerInteractorStyle::OnKeyDown();
+  }
+  void OnChar() override {
+    if (Interactor && isOurs(safeKeySym(), Interactor->GetKeyCode())) return;
+    pcl::visualization::PCLVisualizerInteractorStyle::OnChar();
+  }
+
+ private:
+  std::string safeKeySym() const {
+    const char* s = Interactor ? Interactor->GetKeySym() : nullptr;
+    return s ? s : "";
+  }
+  static bool isOurs(const std::string& sym, char c) {
+    static const char* syms[] = {"space", "Right", "Left",   "Tab",        "plus",
+                                 "minus", "equal", "KP_Add", "KP_Subtract"};
+    for (const char* s : syms)
+      if (sym == s) return true;
+    return std::string(" np+-=123\ts").find(c) != std::string::npos && c != '\0';
+  }
+};
+vtkStandardNewMacro(ViewerInteractorStyle);
+
+/** Builds the VTK actors of one frame on a PCLVisualizer. */
+class FrameRenderer {
+ public:
+  FrameRenderer(const SceneData& scene, const ViewerParameters& params, bool offscreen, int width,
+                int height)
+      : scene_(scene), params_(params), width_(width), height_(height) {
+    if (offscreen) {
+      viewer_.reset(new pcl::visualization::PCLVisualizer(kTool, false));
+      viewer_->getRenderWindow()->SetOffScreenRendering(1);
+    } else {
+      int argc = 1;
+      char name[] = "pcl_movers_viewer";
+      char* argv[] = {name, nullptr};
+      style_ = ViewerInteractorStyle::New();
+      viewer_.reset(new pcl::visualization::PCLVisualizer(argc, argv, kTool, style_, true));
+    }
+    viewer_->setSize(width, height);
+    viewer_->setShowFPS(false);
+    const auto& bg = style_colors_.background;
+    viewer_->setBackgroundColor(bg.r / 255.0, bg.g / 255.0, bg.b / 255.0);
+    renderer_ = viewer_->getRendererCollection()->GetFirstRenderer();
+    font_size_ = std::max(10, height / 42);
+  }
+
+  pcl::visualization::PCLVisualizer& viewer() { return *viewer_; }
+  ViewerInteractorStyle* style() { return style_; }
+  int selectedTrack() const { return selected_; }
+  void setSelectedTrack(int id) { selected_ = id; }
+  const std::vector<io::TrackRow>& rows(std::size_t frame) const {
+    return scene_.tracks.frame(static_cast<int>(frame));
+  }
+
+  /** Loads frame i and replaces all actors. `status` is appended to the overlay. */
+  void show(std::size_t i, const std::string& status = "") {
+    pcl::PointCloud<pcl::PointXYZI> cloud;
+    viz::PointLabels labels;
+    const auto& rows = this->rows(i);
+    const std::string labelled = labelledPath(i);
+    if (!labelled.empty()) {
+      readLabelledCloud(labelled, cloud, labels);
+    } else {
+      scene_.reader.read(i, cloud);
+      const auto ground = viz::estimateGroundMask(cloud);
+      labels = viz::labelPointsFromTracks(cloud, ground, rows);
+    }
+    std::vector<int> movers;
+    for (const auto& r : rows)
+      if (r.mover) movers.push_back(r.track_id);
+    const auto colors = viz::colorPoints(cloud, labels, movers, style_colors_);
+
+    pcl::PointCloud<pcl::PointXYZRGB>::Ptr coloured(new pcl::PointCloud<pcl::PointXYZRGB>);
+    coloured->reserve(cloud.size());
+    std::size_t finite = 0;
+    for (std::size_t k = 0; k < cloud.size(); ++k) {
+      const auto& p = cloud[k];
+      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
+      pcl::PointXYZRGB q;
+      q.x = p.x, q.y = p.y, q.z = p.z;
+      q.r = colors[k].r, q.g = colors[k].g, q.b = colors[k].b;
+      coloured->push_back(q);
+      ++finite;
+    }
+    if (finite == 0) print_warn("[%s] frame %zu has no finite points\n", kTool, i);
+    pcl::visualization::PointCloudColorHandlerRGBField<pcl::PointXYZRGB> rgb(coloured);
+    if (!viewer_->updatePointCloud<pcl::PointXYZRGB>(coloured, rgb, "points"))
+      viewer_->addPointCloud<pcl::PointXYZRGB>(coloured, rgb, "points");
+    viewer_->setPointCloudRenderingProperties(pcl::visualization::PCL_VISUALIZER_POINT_SIZE,
+                                              params_.point_size, "points");
+
+    // Pose of this frame: the sequence's, else fitted to the rows' sensor/world pairs.
+    std::optional<Eigen::Isometry3d> pose;
+    if (scene_.reader.hasPoses()) pose = scene_.reader.pose(i);
+    if (!pose) pose = viz::fitSensorPose(rows);
+    const Eigen::Isometry3d sensor_to_world = pose ? *pose : Eigen::Isometry3d::Identity();
+    const Eigen::Isometry3d world_to_sensor = sensor_to_world.inverse();
+
+    viz::LineSet lines, thick;
+    const io::TrackRow* selected = nullptr;
+    int mover_count = 0;
+    for (const auto& r : rows) {
+      const bool is_selected = r.track_id == selected_;
+      if (is_selected) selected = &r;
+      if (r.mover) ++mover_count;
+      const viz::Color box_color = is_selected ? style_colors_.selected
+                                   : r.mover   ? style_colors_.mover_box
+                                               : viz::trackColor(r.track_id);
+      auto& target = (r.mover || is_selected) ? thick : lines;
+      if (r.length > 0 && r.width > 0 && r.height > 0)
+        target.addBox(viz::OrientedBox::fromTrack(r), box_color);
+      // Arrows for anything visibly moving; stationary tracks would only add clutter.
+      if (r.mover || is_selected || r.speed > 1.0) {
+        const auto arrow = viz::velocityArrow(r, sensor_to_world, params_.arrow_seconds);
+        target.addArrow(arrow.first, arrow.second, box_color);
+      }
+      if ((r.mover || is_selected) && params_.trail > 0) {
+        const auto trail =
+            pose ? scene_.tracks.trail(r.track_id, static_cast<int>(i), params_.trail,
+                                       world_to_sensor)
+                 : scene_.tracks.sensorTrail(r.track_id, static_cast<int>(i), params_.trail);
+        target.addPolyline(trail, box_color);
+      }
+    }
+    if (scene_.has_ground_truth) {
+      auto it = scene_.ground_truth.find(static_cast<int>(i));
+      if (it != scene_.ground_truth.end())
+        for (const auto& o : it->second)
+          lines.addBox(viz::OrientedBox::fromGroundTruth(o), style_colors_.ground_truth);
+    }
+    setLines(thin_actor_, lines, 1.5);
+    setLines(thick_actor_, thick, 3.0);
+
+    std::string extra = status;
+    if (selected_ >= 0 && !selected)
+      extra += (extra.empty() ? "" : "   ") + std::string("track ") + std::to_string(selected_) +
+               " not in this frame";
+    const double t = scene_.reader.time(i);
+    const std::string text =
+        viz::overlayText(i, scene_.reader.size(), t, mover_count, selected, extra) +
+        (scene_.has_tracks ? "" : "\n(no --detections: points only)");
+    // VTK anchors multi-line text at its bottom-left corner: place it so the first line sits at
+    // the top of the window whatever the number of lines.
+    const int text_lines = 1 + static_cast<int>(std::count(text.begin(), text.end(), '\n'));
+    const int text_y = height_ - 10 - static_cast<int>(text_lines * font_size_ * 1.2);
+    const auto& tc = style_colors_.text;
+    if (!viewer_->updateText(text, 12, text_y, font_size_, tc.r / 255.0, tc.g / 255.0, tc.b / 255.0,
+                             "overlay"))
+      viewer_->addText(text, 12, text_y, font_size_, tc.r / 255.0, tc.g / 255.0, tc.b / 255.0,
+                       "overlay");
+    std::string legend =
+        "red: mover points   orange: mover box/arrow/trail   colours: static tracks";
+    if (scene_.has_ground_truth) legend += "   green: ground truth";
+    const int legend_size = std::max(9, font_size_ - 4);
+    if (!viewer_->updateText(legend, 12, 8, legend_size, 0.7, 0.7, 0.7, "legend"))
+      viewer_->addText(legend, 12, 8, legend_size, 0.7, 0.7, 0.7, "legend");
+    renderer_->ResetCameraClippingRange();
+  }
+
+  void applyCamera(viz::CameraPreset preset) {
+    if (preset == viz::CameraPreset::Free) return;
+    const auto c = viz::cameraView(preset);
+    viewer_->setCameraPosition(c.position.x(), c.position.y(), c.position.z(), c.focal.x(),
+                               c.focal.y(), c.focal.z(), c.up.x(), c.up.y(), c.up.z());
+    viewer_->setCameraFieldOfView(c.fov_y_deg * M_PI / 180.0);
+    renderer_->ResetCameraClippingRange();
+  }
+
+  /** Renders and writes the current view; via a temporary name so a failed write leaves nothing
+   * half-written under the final name. */
+  void writeImage(const std::string& path, const std::string& format) {
+    vtkSmartPointer<vtkRenderWindow> window = viewer_->getRenderWindow();
+    renderer_->ResetCameraClippingRange();
+    window->Render();
+    vtkSmartPointer<vtkWindowToImageFilter> grab = vtkSmartPointer<vtkWindowToImageFilter>::New();
+    grab->SetInput(window);
+    grab->SetInputBufferTypeToRGB();
+    grab->ReadFrontBufferOff();
+    grab->Update();
+    const std::string tmp = path + ".part";
+    bool ok = false;
+    if (format == "ppm") {
+      ok = writePpm(grab->GetOutput(), tmp);
+    } else {
+      vtkSmartPointer<vtkPNGWriter> writer = vtkSmartPointer<vtkPNGWriter>::New();
+      writer->SetFileName(tmp.c_str());
+      writer->SetInputConnection(grab->GetOutputPort());
+      writer->Write();
+      std::error_code ec;
+      ok = writer->GetErrorCode() == 0 && fs::file_size(tmp, ec) > 0 && !ec;
+    }
+    std::error_code ec;
+    if (ok) fs::rename(tmp, path, ec);
+    if (!ok || ec) {
+      fs::remove(tmp, ec);
+      throw InputError(path, 0, "cannot write image");
+    }
+  }
+
+ private:
+  std::string labelledPath(std::size_t i) const {
+    if (scene_.labelled_dir.empty()) return "";
+    const fs::path p = fs::path(scene_.labelled_dir) / (scene_.reader.frameName(i) + ".pcd");
+    std::error_code ec;
+    return fs::is_regular_file(p, ec) ? p.string() : "";
+  }
+
+  static bool writePpm(vtkImageData* image, const std::string& path) {
+    int dims[3];
+    image->GetDimensions(dims);
+    if (image->GetNumberOfScalarComponents() < 3 || dims[0] <= 0 || dims[1] <= 0) return false;
+    const int comps = image->GetNumberOfScalarComponents();
+    const auto* data = static_cast<const unsigned char*>(image->GetScalarPointer());
+    std::ofstream out(path, std::ios::binary);
+    out << "P6\n" << dims[0] << " " << dims[1] << "\n255\n";
+    std::vector<unsigned char> row(static_cast<std::size_t>(dims[0]) * 3);
+    // VTK images start at the bottom row; PPM at the top.
+    for (int y = dims[1] - 1; y >= 0; --y) {
+      for (int x = 0; x < dims[0]; ++x)
+        for (int c = 0; c < 3; ++c)
+          row[static_cast<std::size_t>(x) * 3 + c] =
+              data[(static_cast<std::size_t>(y) * dims[0] + x) * comps + c];
+      out.write(reinterpret_cast<const char*>(row.data()),
+                static_cast<std::streamsize>(row.size()));
+    }
+    return static_cast<bool>(out);
+  }
+
+  void setLines(vtkSmartPointer<vtkActor>& actor, const viz::LineSet& set, double width) {
+    if (actor) renderer_->RemoveActor(actor);
+    actor = nullptr;
+    if (set.segments.empty()) return;
+    auto points = vtkSmartPointer<vtkPoints>::New();
+    auto cells = vtkSmartPointer<vtkCellArray>::New();
+    auto colors = vtkSmartPointer<vtkUnsignedCharArray>::New();
+    colors->SetNumberOfComponents(3);
+    colors->SetName("colors");
+    for (const auto& s : set.segments) {
+      const vtkIdType a = points->InsertNextPoint(s.a.x(), s.a.y(), s.a.z());
+      const vtkIdType b = points->InsertNextPoint(s.b.x(), s.b.y(), s.b.z());
+      const unsigned char rgb[3] = {s.color.r, s.color.g, s.color.b};
+      colors->InsertNextTypedTuple(rgb);
+      colors->InsertNextTypedTuple(rgb);
+      const vtkIdType ids[2] = {a, b};
+      cells->InsertNextCell(2, ids);
+    }
+    auto poly = vtkSmartPointer<vtkPolyData>::New();
+    poly->SetPoints(points);
+    poly->SetLines(cells);
+    poly->GetPointData()->SetScalars(colors);
+    auto mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
+    mapper->SetInputData(poly);
+    mapper->SetColorModeToDirectScalars();
+    mapper->ScalarVisibilityOn();
+    actor = vtkSmartPointer<vtkActor>::New();
+    actor->SetMapper(mapper);
+    actor->GetProperty()->SetLineWidth(static_cast<float>(width));
+    actor->GetProperty()->LightingOff();
+    renderer_->AddActor(actor);
+  }
+
+  const SceneData& scene_;
+  const ViewerParameters& params_;
+  viz::SceneStyle style_colors_;
+  int width_, height_;
+  int font_size_ = 16;
+  int selected_ = -1;
+  pcl::visualization::PCLVisualizer::Ptr viewer_;
+  ViewerInteractorStyle* style_ = nullptr;
+  vtkRenderer* renderer_ = nullptr;
+  vtkSmartPointer<vtkActor> thin_actor_, thick_actor_;
+};
+
+bool hasDisplay() {
+  const char* d = std::getenv("DISPLAY");
+  return d && *d;
+}
+
+/** Off-screen mode: frames A..B to DIR/NNNNNN.png. On any error the images written so far (and
+ * the folder, if this run created it) are removed, so a failed run leaves nothing behind. */
+int renderScreenshots(const SceneData& scene, const ViewerParameters& p, viz::FrameRange range,
+                      int width, int height, viz::CameraPreset camera) {
+  std::error_code ec;
+  const bool created = !fs::exists(p.screenshot_dir, ec);
+  io::prepareOutputDirectory(p.screenshot_dir, p.overwrite);
+  std::vector<std::string> written;
+  try {
+    FrameRenderer renderer(scene, p, true, width, height);
+    tools::ProgressBar bar(range.last - range.first + 1, "frames");
+    for (std::size_t i = range.first; i <= range.last; ++i) {
+      renderer.show(i);
+      renderer.applyCamera(camera);
+      const std::string path =
+          (fs::path(p.screenshot_dir) / (scene.reader.frameName(i) + "." + p.format)).string();
+      renderer.writeImage(path, p.format);
+      written.push_back(path);
+      bar.update(i - range.first + 1);
+    }
+    bar.finish();
+  } catch (...) {
+    for (const auto& w : written) fs::remove(w, ec);
+    if (created) fs::remove(p.screenshot_dir, ec);
+    throw;
+  }
+  print_info("[%s] wrote %zu %s images to %s\n", kTool, written.size(), p.format.c_str(),
+             p.screenshot_dir.c_str());
+  return 0;
+}
+
+std::string freeScreenshotName(std::size_t frame, const SceneData& scene) {
+  const std::string base = "viewer_" + scene.reader.frameName(frame);
+  std::error_code ec;
+  for (int k = 0; k < 10000; ++k) {
+    const std::string name = base + (k ? "_" + std::to_string(k) : "") + ".png";
+    if (!fs::exists(name, ec)) return name;
+  }
+  return base + "_last.png";
+}
+
+int runInteractive(const SceneData& scene, const ViewerParameters& p, viz::FrameRange range,
+                   int width, int height, viz::CameraPreset camera) {
+  FrameRenderer renderer(scene, p, false, width, height);
+  std::size_t frame = range.first;
+  bool playing = false, dirty = true, camera_dirty = true, screenshot = false;
+  double speed = 1.0;
+  renderer.style()->handler = [&](const std::string& sym, char code) {
+    if (sym == "space" || code == ' ') {
+      playing = !playing;
+      dirty = true;
+    } else if (sym == "Right" || code == 'n') {
+      playing = false;
+      frame = frame < range.last ? frame + 1 : range.last;
+      dirty = true;
+    } else if (sym == "Left" || code == 'p') {
+      playing = false;
+      frame = frame > range.first ? frame - 1 : range.first;
+      dirty = true;
+    } else if (sym == "plus" || sym == "KP_Add" || sym == "equal" || code == '+' || code == '=') {
+      speed = std::min(speed * 2.0, 16.0);
+      dirty = true;
+    } else if (sym == "minus" || sym == "KP_Subtract" || code == '-') {
+      speed = std::max(speed * 0.5, 1.0 / 16);
+      dirty = true;
+    } else if (code == '1' || code == '2' || code == '3') {
+      camera = static_cast<viz::CameraPreset>(code - '1');
+      camera_dirty = dirty = true;
+    } else if (sym == "Tab" || code == '\t') {
+      renderer.setSelectedTrack(
+          viz::nextSelectedTrack(renderer.rows(frame), renderer.selectedTrack()));
+      dirty = true;
+    } else if (code == 's') {
+      screenshot = true;
+    } else {
+      return false;
+    }
+    return true;
+  };
+  auto last_step = std::chrono::steady_clock::now();
+  while (!renderer.viewer().wasStopped()) {
+    if (dirty) {
+      char status[128];
+      std::snprintf(status, sizeof(status), "%s  x%g   camera: %s", playing ? "playing" : "paused",
+                    speed, viz::cameraPresetName(camera));
+      renderer.show(frame, status);
+      if (camera_dirty) renderer.applyCamera(camera);
+      dirty = camera_dirty = false;
+    }
+    if (screenshot) {
+      screenshot = false;
+      const std::string name = freeScreenshotName(frame, scene);
+      renderer.writeImage(name, "png");
+      print_info("[%s] saved %s\n", kTool, name.c_str());
+    }
+    renderer.viewer().spinOnce(15, true);
+    if (playing) {
+      const double dt =
+          frame + 1 < scene.reader.size()
+              ? std::max(1e-3, scene.reader.time(frame + 1) - scene.reader.time(frame))
+              : 1.0 / p.rate;
+      const auto now = std::chrono::steady_clock::now();
+      if (std::chrono::duration<double>(now - last_step).count() >= dt / speed) {
+        last_step = now;
+        frame = frame < range.last ? frame + 1 : range.first;  // loop the range
+        dirty = true;
+      }
+    }
+  }
+  return 0;
+}
+
+int run(int argc, char** argv) {
+  if (tools::wantsHelp(argc, argv)) {
+    printHelp(argv[0]);
+    return 0;
+  }
+  std::string sequence;
+  const ViewerParameters p = parseParameters(argc, argv, sequence);
+  const auto size = viz::parseImageSize(p.size);
+  const auto camera = viz::parseCameraPreset(p.camera);
+  SceneData scene;
+  loadScene(sequence, p, scene);
+  const viz::FrameRange range = p.frames.empty()
+                                    ? viz::FrameRange{0, scene.reader.size() - 1}
+                                    : viz::parseFrameRange(p.frames, scene.reader.size());
+  // VTK's X11 window aborts the process without a display; say so instead.
+  if (!hasDisplay())
+    throw InputError("no X display (DISPLAY is unset): run under xvfb-run for --screenshot-dir");
+  if (!p.screenshot_dir.empty())
+    return renderScreenshots(scene, p, range, size.first, size.second, camera);
+  return runInteractive(scene, p, range, size.first, size.second, camera);
+}
+
+}  // namespace
+}  // namespace pcl_movers
+
+int main(int argc, char** argv) {
+  return pcl_movers::tools::runTool(pcl_movers::kTool,
+                                    [&]() { return pcl_movers::run(argc, argv); });
+}

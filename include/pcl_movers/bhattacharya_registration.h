@@ -1,0 +1,218 @@
+/*
+ * Object-to-object registration by maximising the Bhattacharyya similarity of surface densities,
+ * after Morris, Colonna, Haley, "Ladar-based mover detection from moving vehicles", section 5.
+ * SPDX-License-Identifier: BSD-3-Clause
+ */
+#pragma once
+
+#include <pcl_movers/surface_density.h>
+
+#include <pcl/registration/registration.h>
+
+#include <Eigen/Core>
+#include <vector>
+
+namespace pcl_movers {
+
+/** \brief The Bhattacharyya similarity B over the searched motions of the last align().
+ *
+ * values[(yaw · ny + iy) · nx + ix] is B for the source translated by
+ * ((ix - (nx-1)/2)·resolution, (iy - (ny-1)/2)·resolution) from the guess and turned by yaws[yaw]
+ * about its centroid. With z search on, each value is the best over the searched z shifts.
+ */
+struct SimilaritySurface {
+  int nx = 0, ny = 0;
+  float resolution = 0.f;     ///< translation step between samples [m]
+  std::vector<float> yaws;    ///< yaw of each layer [rad]
+  std::vector<float> values;  ///< B per sample, see above
+  float at(int ix, int iy, int yaw_layer = 0) const {
+    return values[(static_cast<std::size_t>(yaw_layer) * ny + iy) * nx + ix];
+  }
+  bool empty() const { return values.empty(); }
+};
+
+/** \brief Registration of coarsely sampled LiDAR objects by the Bhattacharyya similarity of their
+ * surface densities (see SurfaceDensity), a drop-in for pcl::IterativeClosestPoint or
+ * pcl::NormalDistributionsTransform on object-to-object problems.
+ *
+ * Motion model: a horizontal translation (plus optionally z) and a yaw about the vertical axis,
+ * which is what ground vehicles and people do. For every yaw layer the (guess-transformed, turned)
+ * source density is correlated with the target density for all translations in a square window
+ * of ± search radius around the guess at once (paper eq. 3: B_D = sqrt(ρ_source) ⋆ sqrt(ρ_target)),
+ * so there are no local minima inside the window. The peak is refined by a quadratic fit over its
+ * 3×3 (×3 yaw layers) neighbourhood.
+ *
+ * \code
+ * pcl_movers::BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ> reg;
+ * reg.setInputSource(object_now);      // points in world coordinates
+ * reg.setInputTarget(object_before);
+ * reg.setSearchRadius(2.0f);           // metres around the guess
+ * reg.align(aligned, predicted_motion_inverse);
+ * if (reg.hasConverged() && reg.getSimilarity() > 0.5) use(reg.getFinalTransformation());
+ * \endcode
+ *
+ * getFinalTransformation() maps the source onto the target as in PCL: x ↦ t + R_z(ψ)(x - c) + c
+ * applied after the guess, c being the centroid of the guess-transformed source.
+ *
+ * hasConverged() is false when the peak lies on the edge of the translation window (the true
+ * motion may lie outside it), when B is below setMinSimilarity(), or when source or target have
+ * fewer than two finite points; getFinalTransformation() is then the guess.
+ *
+ * The sensor origin (range → σ of each point) defaults to each cloud's `sensor_origin_`; set it
+ * with setSensorOrigin() when the clouds are in a world frame whose origin is not the sensor.
+ */
+template <typename PointSource, typename PointTarget, typename Scalar = float>
+class BhattacharyaRegistration : public pcl::Registration<PointSource, PointTarget, Scalar> {
+ public:
+  using Base = pcl::Registration<PointSource, PointTarget, Scalar>;
+  using typename Base::Matrix4;
+  using PointCloudSource = typename Base::PointCloudSource;
+  using PointCloudSourcePtr = typename PointCloudSource::Ptr;
+  using PointCloudSourceConstPtr = typename PointCloudSource::ConstPtr;
+  using PointCloudTarget = typename Base::PointCloudTarget;
+  using PointCloudTargetConstPtr = typename PointCloudTarget::ConstPtr;
+
+  using Ptr = pcl::shared_ptr<BhattacharyaRegistration<PointSource, PointTarget, Scalar>>;
+  using ConstPtr =
+      pcl::shared_ptr<const BhattacharyaRegistration<PointSource, PointTarget, Scalar>>;
+
+  BhattacharyaRegistration();
+  ~BhattacharyaRegistration() override = default;
+
+  /** \brief Unlike the base class, an empty cloud is accepted; align() then reports
+   * hasConverged() == false instead of silently reusing the previous cloud. */
+  void setInputSource(const PointCloudSourceConstPtr& cloud) override;
+  void setInputTarget(const PointCloudTargetConstPtr& cloud) override;
+
+  /** \brief Same as pcl::Registration::align() (which this hides): copies the source to
+   * `output`, runs computeTransformation() and leaves `output` moved by the final transformation.
+   * Redefined because the base version cannot be compiled for mixed point types in PCL 1.13 (its
+   * initCompute() hands a source-typed kd-tree to a target-typed correspondence estimator); this
+   * one needs no kd-tree at all. Calls through a pcl::Registration pointer still work for equal
+   * point types. */
+  void align(PointCloudSource& output) { align(output, Matrix4::Identity()); }
+  void align(PointCloudSource& output, const Matrix4& guess);
+
+  /** \brief Registers against an accumulated model instead of a target cloud: the grid (size,
+   * resolutions, centre) is the model's, and the grid setters below are ignored while it is set.
+   * If no target cloud has been given, a one-point placeholder at the model centre is installed
+   * so that pcl::Registration::align() runs. Pass nullptr to go back to target clouds. */
+  void setTargetDensity(const SurfaceDensity::ConstPtr& density);
+  SurfaceDensity::ConstPtr getTargetDensity() const { return target_density_; }
+
+  /** \brief Density of the source after the final transformation, on the target's grid (the
+   * target density's grid, or the grid built around the target cloud): ready for
+   * SurfaceDensity::accumulate() into a model. Null before the first align() or after a failure
+   * with an empty source. */
+  SurfaceDensity::ConstPtr getSourceDensity() const { return source_density_; }
+
+  /** \brief B at the optimum of the last align(), in [0,1] (1 for identical densities). */
+  float getSimilarity() const { return similarity_; }
+
+  /** \brief B over all searched translations × yaw layers of the last align() (paper Fig. 6). */
+  const SimilaritySurface& getSimilaritySurface() const { return surface_; }
+
+  /** \brief Half width of the square translation window around the guess [m] (default 2). */
+  void setSearchRadius(float radius) { search_radius_ = radius; }
+  float getSearchRadius() const { return search_radius_; }
+
+  /** \brief Cell size in x and y [m] (default 0.2); also the translation step of the search. */
+  void setResolution(float resolution) { resolution_ = resolution; }
+  float getResolution() const { return resolution_; }
+
+  /** \brief Density grid size in cells (default the paper's 29 × 29 × 7). */
+  void setGridSize(int nx, int ny, int nz) {
+    nx_ = nx;
+    ny_ = ny;
+    nz_ = nz;
+  }
+  int getGridNx() const { return nx_; }
+  int getGridNy() const { return ny_; }
+  int getGridNz() const { return nz_; }
+
+  /** \brief Height covered by the grid [m] (default 2.8); the vertical cell size is
+   * height / nz. */
+  void setGridHeight(float height) { grid_height_ = height; }
+  float getGridHeight() const { return grid_height_; }
+
+  /** \brief Number of horizontal slices (the grid's nz) at unchanged grid height: the paper's
+   * reduced vertical resolution, e.g. 3. */
+  void setVerticalSlices(int slices) { nz_ = slices; }
+  int getVerticalSlices() const { return nz_; }
+
+  /** \brief Number of yaw layers (odd; 1 = translation only, the default) and their spacing
+   * [rad] (default 5°). Layers are centred on the guess's yaw. */
+  void setYawSamples(int samples) { yaw_samples_ = samples; }
+  int getYawSamples() const { return yaw_samples_; }
+  void setYawStep(float step) { yaw_step_ = step; }
+  float getYawStep() const { return yaw_step_; }
+
+  /** \brief σ = max(min sigma, sigma per metre · range) of each point's Gaussian. */
+  void setSigmaPerMetre(float sigma_per_metre) { sigma_per_metre_ = sigma_per_metre; }
+  float getSigmaPerMetre() const { return sigma_per_metre_; }
+  void setMinSigma(float min_sigma) { min_sigma_ = min_sigma; }
+  float getMinSigma() const { return min_sigma_; }
+
+  /** \brief B below this means "no match": hasConverged() is false (default 0.2). */
+  void setMinSimilarity(float min_similarity) { min_similarity_ = min_similarity; }
+  float getMinSimilarity() const { return min_similarity_; }
+
+  /** \brief Also search vertical shifts of ± setSearchRadiusZ() (default off: vehicles stay on
+   * the ground and a z search costs a factor of the number of z shifts). */
+  void setSearchZ(bool search_z) { search_z_ = search_z; }
+  bool getSearchZ() const { return search_z_; }
+  void setSearchRadiusZ(float radius_z) { search_radius_z_ = radius_z; }
+  float getSearchRadiusZ() const { return search_radius_z_; }
+
+  /** \brief Sensor position used for the ranges of both clouds' points (same frame as the
+   * points). Without it each cloud's own `sensor_origin_` is used. */
+  void setSensorOrigin(const Eigen::Vector3f& origin) {
+    sensor_origin_ = origin;
+    use_sensor_origin_ = true;
+  }
+  /** \brief Back to each cloud's `sensor_origin_`. */
+  void clearSensorOrigin() { use_sensor_origin_ = false; }
+  Eigen::Vector3f getSensorOrigin() const { return sensor_origin_; }
+  bool hasSensorOrigin() const { return use_sensor_origin_; }
+
+ protected:
+  using Base::converged_;
+  using Base::final_transformation_;
+  using Base::indices_;
+  using Base::input_;
+  using Base::previous_transformation_;
+  using Base::reg_name_;
+  using Base::target_;
+  using Base::transformation_;
+
+  void computeTransformation(PointCloudSource& output, const Matrix4& guess) override;
+
+  /** \brief Builds the target's density (from target_ when no density was set). False when the
+   * target has < 2 finite points. */
+  bool buildTargetDensity(SurfaceDensity& target) const;
+
+  float search_radius_ = 2.0f;
+  float resolution_ = 0.2f;
+  int nx_ = 29, ny_ = 29, nz_ = 7;
+  float grid_height_ = 2.8f;
+  int yaw_samples_ = 1;
+  float yaw_step_ = 0.0872664626f;  // 5 degrees
+  float sigma_per_metre_ = 0.01f;
+  float min_sigma_ = 0.1f;
+  float min_similarity_ = 0.2f;
+  bool search_z_ = false;
+  float search_radius_z_ = 0.4f;
+  Eigen::Vector3f sensor_origin_ = Eigen::Vector3f::Zero();
+  bool use_sensor_origin_ = false;
+
+  SurfaceDensity::ConstPtr target_density_;
+  SurfaceDensity::Ptr source_density_;
+  float similarity_ = 0.f;
+  SimilaritySurface surface_;
+};
+
+}  // namespace pcl_movers
+
+#ifdef PCL_NO_PRECOMPILE
+#include <pcl_movers/impl/bhattacharya_registration.hpp>
+#endif

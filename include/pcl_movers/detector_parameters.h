@@ -1,0 +1,305 @@
+/*
+ * SPDX-License-Identifier: BSD-3-Clause
+ */
+#pragma once
+
+#include <pcl_movers/common.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace pcl_movers {
+
+/** \brief Every tunable of the mover-detection pipeline, with its default, in one place.
+ *
+ * MoverDetector and MoverTracker read it; `pcl_movers_detect -h` prints it (through
+ * forEachParameter(), so the help can never drift from the defaults) and `--config FILE` /
+ * `--<key> VALUE` set it. Keys are the member names.
+ */
+struct DetectorParameters {
+  // ------------------------------------------------------------------ organizer
+  /// Sensor model preset used to organize unorganized scans: auto (estimate from the first scan),
+  /// hdl64, hdl32, vlp16, os1_64, ladar2d.
+  std::string sensor = "hdl64";
+
+  // ------------------------------------------------------------------ ground removal
+  /// Height of the sensor above the ground [m] (KITTI: 1.73); seeds the innermost ground planes.
+  double sensor_height = 1.73;
+  /// Points closer than this to their cell's ground plane are ground [m].
+  double ground_distance = 0.25;
+  /// Largest slope of a ground plane [deg].
+  double ground_max_slope_deg = 15.0;
+
+  // ------------------------------------------------------------------ segmentation
+  /// Region growing joins range-image neighbours whose depth differs by less than
+  /// depth_ratio · range (the paper's d_T proportional to depth).
+  double depth_ratio = 0.05;
+  /// Lower bound on that depth threshold [m] (near objects).
+  double depth_min = 0.1;
+  /// Empty range-image cells bridged by region growing in each direction (0 = strict 8-neighbour).
+  int max_gap = 2;
+  /// Clusters with fewer points are ignored (noise, too small to track).
+  int min_cluster_points = 12;
+  /// Clusters further than this from the sensor are ignored [m] (too sparse to register).
+  double max_range = 60.0;
+
+  // ------------------------------------------------------------------ registration / density
+  /// Density grid cell size in x/y [m] and in z [m], and grid size in cells (the paper: 29×29×7).
+  double density_resolution = 0.2;
+  double density_resolution_z = 0.4;
+  int density_cells_xy = 29;
+  int density_cells_z = 7;
+  /// Gaussian σ per metre of range and its lower bound [m].
+  double sigma_per_metre = 0.01;
+  double min_sigma = 0.1;
+  /// Yaw layers of the registration (1 = translation only; the paper used 3-5).
+  int yaw_samples = 1;
+  /// A registered candidate is only an update when its Bhattacharyya similarity reaches this
+  /// (low B = occlusion or wrong object).
+  double min_similarity = 0.35;
+  /// Half-life of the accumulated object model [frames].
+  double model_half_life = 4.0;
+
+  // ------------------------------------------------------------------ tracker
+  /// Association mode: registration (the paper's) or centroid (the paper's "simplest approach").
+  std::string mode = "registration";
+  /// σ of the white-noise acceleration of the constant-velocity Kalman filter [m/s²].
+  double acceleration_noise = 3.0;
+  /// Hard acceleration limit: updates implying more are rejected [m/s²].
+  double acceleration_limit = 12.0;
+  /// σ of a registered position measurement [m].
+  double registration_sigma = 0.1;
+  /// σ of a centroid position measurement [m] (centroids move with the viewpoint).
+  double centroid_sigma = 0.3;
+  /// Velocity σ of a newborn track [m/s] (its velocity is unknown).
+  double initial_velocity_sigma = 6.0;
+  /// Gate: Mahalanobis distance bound of candidate centroids (chi²(2) 99 % ≈ 3.03).
+  double gate_sigmas = 3.0;
+  /// Extra gate radius for centroid shifts from changing views [m].
+  double gate_margin = 1.0;
+  /// Largest gate radius [m].
+  double max_gate_radius = 4.0;
+  /// Frames a track may go without an update (occlusion) before it is deleted.
+  int max_missed_frames = 5;
+  /// Upper bound on the number of live tracks (new clusters are not tracked beyond it).
+  int max_tracks = 2000;
+  /// Only clusters up to this long [m] and tall [m] can be movers and are registered; larger
+  /// ones (buildings, walls, hedges) are tracked by centroid and always static.
+  double max_mover_length = 12.0;
+  double max_mover_height = 4.5;
+  /// Clusters lower than this are not movers [m] (kerbs, ground clutter).
+  double min_mover_height = 0.6;
+
+  // ------------------------------------------------------------------ mover decision
+  /// Speed above which a track counts as moving [m/s].
+  double mover_speed = 1.2;
+  /// A track is a mover when its speed exceeded mover_speed in mover_votes of its last
+  /// mover_window updates, it has at least mover_min_age updates, and the displacement of its
+  /// measurements over the window is consistent with that speed.
+  int mover_window = 5;
+  int mover_votes = 3;
+  int mover_min_age = 3;
+  /// Displacement check: net measured displacement over the window must be at least this
+  /// fraction of mover_speed × elapsed time.
+  double displacement_ratio = 0.6;
+
+  /** \brief Calls `f(key, member, description)` for every parameter (double, int or string). */
+  template <typename F>
+  void forEachParameter(F&& f);
+  template <typename F>
+  void forEachParameter(F&& f) const {
+    const_cast<DetectorParameters*>(this)->forEachParameter(f);
+  }
+
+  /** \brief Sets `key` from text; throws InputError("where: ...") for an unknown key or a value
+   * that is not a valid number. */
+  void set(const std::string& key, const std::string& value, const std::string& where);
+  /** \brief Reads `key = value` lines ('#' comments and blank lines allowed); unknown keys and
+   * malformed lines throw InputError with file:line. */
+  void readConfig(const std::string& path);
+  /** \brief Checks ranges (positive sizes etc.); throws InputError naming the key. */
+  void validate() const;
+  /** \brief All keys, for the tool's argument checking. */
+  std::vector<std::string> keys() const;
+  /** \brief `key = value` lines (a config file the tool can read back). */
+  std::string toConfig() const;
+  /** \brief A JSON object with every parameter. */
+  std::string toJson() const;
+};
+
+// --------------------------------------------------------------------------- implementation
+template <typename F>
+void DetectorParameters::forEachParameter(F&& f) {
+  f("sensor", sensor, "sensor preset for organizing: auto, hdl64, hdl32, vlp16, os1_64, ladar2d");
+  f("sensor_height", sensor_height, "sensor height above the ground [m]");
+  f("ground_distance", ground_distance, "max distance of ground points from their plane [m]");
+  f("ground_max_slope_deg", ground_max_slope_deg, "max ground slope [deg]");
+  f("depth_ratio", depth_ratio, "region growing depth threshold d_T / range");
+  f("depth_min", depth_min, "lower bound of d_T [m]");
+  f("max_gap", max_gap, "empty range-image cells bridged by region growing");
+  f("min_cluster_points", min_cluster_points, "clusters with fewer points are ignored");
+  f("max_range", max_range, "clusters further than this are ignored [m]");
+  f("density_resolution", density_resolution, "density grid cell size in x/y [m]");
+  f("density_resolution_z", density_resolution_z, "density grid cell size in z [m]");
+  f("density_cells_xy", density_cells_xy, "density grid cells in x and y");
+  f("density_cells_z", density_cells_z, "density grid cells in z");
+  f("sigma_per_metre", sigma_per_metre, "Gaussian sigma per metre of range");
+  f("min_sigma", min_sigma, "lower bound of the Gaussian sigma [m]");
+  f("yaw_samples", yaw_samples, "yaw layers of the registration (1 = translation only)");
+  f("min_similarity", min_similarity, "min Bhattacharyya similarity of an update");
+  f("model_half_life", model_half_life, "half-life of the accumulated model [frames]");
+  f("mode", mode, "association: registration or centroid");
+  f("acceleration_noise", acceleration_noise, "Kalman white-noise acceleration sigma [m/s^2]");
+  f("acceleration_limit", acceleration_limit, "updates implying more acceleration are rejected [m/s^2]");
+  f("registration_sigma", registration_sigma, "sigma of a registered position [m]");
+  f("centroid_sigma", centroid_sigma, "sigma of a centroid position [m]");
+  f("initial_velocity_sigma", initial_velocity_sigma, "velocity sigma of a new track [m/s]");
+  f("gate_sigmas", gate_sigmas, "gate: Mahalanobis bound");
+  f("gate_margin", gate_margin, "gate: extra radius for centroid shifts [m]");
+  f("max_gate_radius", max_gate_radius, "gate: largest radius [m]");
+  f("max_missed_frames", max_missed_frames, "frames a track coasts before deletion");
+  f("max_tracks", max_tracks, "cap on live tracks");
+  f("max_mover_length", max_mover_length, "longer clusters are static, tracked by centroid [m]");
+  f("max_mover_height", max_mover_height, "taller clusters are static, tracked by centroid [m]");
+  f("min_mover_height", min_mover_height, "lower clusters are never movers [m]");
+  f("mover_speed", mover_speed, "speed threshold of a mover [m/s]");
+  f("mover_window", mover_window, "mover decision window N [updates]");
+  f("mover_votes", mover_votes, "fast updates M of the last N needed");
+  f("mover_min_age", mover_min_age, "min updates of a mover track K");
+  f("displacement_ratio", displacement_ratio, "min net displacement / (mover_speed * time)");
+}
+
+namespace detail {
+inline std::string trim(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t\r\n");
+  if (b == std::string::npos) return "";
+  const auto e = s.find_last_not_of(" \t\r\n");
+  return s.substr(b, e - b + 1);
+}
+inline void parseValue(const std::string& text, double& v, const std::string& key,
+                       const std::string& where) {
+  char* end = nullptr;
+  const double d = std::strtod(text.c_str(), &end);
+  if (text.empty() || end == text.c_str() || *end != '\0' || !std::isfinite(d))
+    throw InputError(where + ": " + key + ": '" + text + "' is not a finite number");
+  v = d;
+}
+inline void parseValue(const std::string& text, int& v, const std::string& key,
+                       const std::string& where) {
+  char* end = nullptr;
+  const long l = std::strtol(text.c_str(), &end, 10);
+  if (text.empty() || end == text.c_str() || *end != '\0' || l < -1000000000L || l > 1000000000L)
+    throw InputError(where + ": " + key + ": '" + text + "' is not an integer");
+  v = static_cast<int>(l);
+}
+inline void parseValue(const std::string& text, std::string& v, const std::string& key,
+                       const std::string& where) {
+  if (text.empty()) throw InputError(where + ": " + key + ": empty value");
+  v = text;
+}
+inline std::string formatValue(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+inline std::string formatValue(int v) { return std::to_string(v); }
+inline std::string formatValue(const std::string& v) { return v; }
+inline std::string jsonValue(double v) { return formatValue(v); }
+inline std::string jsonValue(int v) { return formatValue(v); }
+inline std::string jsonValue(const std::string& v) { return "\"" + v + "\""; }
+}  // namespace detail
+
+inline void DetectorParameters::set(const std::string& key, const std::string& value,
+                                    const std::string& where) {
+  bool found = false;
+  forEachParameter([&](const char* k, auto& member, const char*) {
+    if (key == k) {
+      detail::parseValue(detail::trim(value), member, key, where);
+      found = true;
+    }
+  });
+  if (!found) throw InputError(where + ": unknown parameter '" + key + "'");
+}
+
+inline void DetectorParameters::readConfig(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path, 0, "cannot open config file");
+  std::string line;
+  std::size_t number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    const auto hash = line.find('#');
+    if (hash != std::string::npos) line.erase(hash);
+    line = detail::trim(line);
+    if (line.empty()) continue;
+    const auto eq = line.find('=');
+    const std::string where = path + ":" + std::to_string(number);
+    if (eq == std::string::npos) throw InputError(path, number, "expected 'key = value'");
+    set(detail::trim(line.substr(0, eq)), line.substr(eq + 1), where);
+  }
+}
+
+inline void DetectorParameters::validate() const {
+  auto positive = [](const char* key, double v) {
+    if (!(v > 0)) throw InputError(std::string("parameter ") + key + " must be > 0");
+  };
+  positive("sensor_height", sensor_height);
+  positive("ground_distance", ground_distance);
+  positive("depth_ratio", depth_ratio);
+  positive("max_range", max_range);
+  positive("density_resolution", density_resolution);
+  positive("density_resolution_z", density_resolution_z);
+  positive("density_cells_xy", density_cells_xy);
+  positive("density_cells_z", density_cells_z);
+  positive("sigma_per_metre", sigma_per_metre);
+  positive("min_sigma", min_sigma);
+  positive("yaw_samples", yaw_samples);
+  positive("model_half_life", model_half_life);
+  positive("acceleration_limit", acceleration_limit);
+  positive("registration_sigma", registration_sigma);
+  positive("centroid_sigma", centroid_sigma);
+  positive("initial_velocity_sigma", initial_velocity_sigma);
+  positive("gate_sigmas", gate_sigmas);
+  positive("max_gate_radius", max_gate_radius);
+  positive("max_tracks", max_tracks);
+  positive("mover_window", mover_window);
+  positive("mover_votes", mover_votes);
+  if (mover_votes > mover_window)
+    throw InputError("parameter mover_votes must not exceed mover_window");
+  if (min_similarity < 0 || min_similarity > 1)
+    throw InputError("parameter min_similarity must be in [0, 1]");
+  if (max_missed_frames < 0) throw InputError("parameter max_missed_frames must be >= 0");
+  if (min_cluster_points < 1) throw InputError("parameter min_cluster_points must be >= 1");
+  if (mode != "registration" && mode != "centroid")
+    throw InputError("parameter mode must be 'registration' or 'centroid', not '" + mode + "'");
+}
+
+inline std::vector<std::string> DetectorParameters::keys() const {
+  std::vector<std::string> k;
+  forEachParameter([&](const char* key, const auto&, const char*) { k.emplace_back(key); });
+  return k;
+}
+
+inline std::string DetectorParameters::toConfig() const {
+  std::string out;
+  forEachParameter([&](const char* key, const auto& v, const char* doc) {
+    out += std::string(key) + " = " + detail::formatValue(v) + "  # " + doc + "\n";
+  });
+  return out;
+}
+
+inline std::string DetectorParameters::toJson() const {
+  std::string out = "{";
+  bool first = true;
+  forEachParameter([&](const char* key, const auto& v, const char*) {
+    out += std::string(first ? "" : ", ") + "\"" + key + "\": " + detail::jsonValue(v);
+    first = false;
+  });
+  return out + "}";
+}
+
+}  // namespace pcl_movers

@@ -1,0 +1,175 @@
+/*
+ * SPDX-License-Identifier: BSD-3-Clause
+ */
+#pragma once
+
+#include <pcl/filters/filter_indices.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+#include <pcl/sample_consensus/ransac.h>
+#include <pcl/sample_consensus/sac_model_perpendicular_plane.h>
+
+#include <cstdint>
+#include <vector>
+
+namespace pcl_movers {
+
+/** \brief Removes the ground of a spinning-LiDAR scan with local, roughly horizontal planes
+ * (Morris et al., section 4: "a local, roughly horizontal, planar model is used to fit ground
+ * points").
+ *
+ * The ground around the sensor is cut into polar cells: `getNumSectors()` equal azimuth sectors
+ * times rings whose radial size grows with range (`setRingEdges()`), because a spinning LiDAR's
+ * point density falls with the square of range — near cells would otherwise hold thousands of
+ * points and far ones a handful. In every cell a plane is fitted with PCL's sample consensus
+ * (pcl::SampleConsensusModelPerpendicularPlane with axis z and `getMaxTilt()` as angle limit,
+ * pcl::RandomSampleConsensus on an evenly strided subsample of at most `getMaxSamples()` points,
+ * then a least-squares refit on the inliers). Cells are processed from the sensor outwards; each
+ * cell only considers points near the plane of its inner neighbour (the "prior"), so a car roof or
+ * a table-top cannot be mistaken for the road, and a cell whose fit fails (too few points, too
+ * steep, a jump of more than `getMaxStep()` from the prior) inherits the prior. The innermost ring
+ * starts from a horizontal plane `getSensorHeight()` below the input's `sensor_origin_`. Every
+ * point of a cell is then classified by its distance to the cell's plane: ground when it is
+ * within `getDistanceThreshold()`. (Calling everything below the plane ground was tried and cost
+ * ~4 points of precision on SemanticKITTI: planes that sit a little high near walls and bushes then
+ * swallow their lower parts.)
+ *
+ * Because each cell has its own plane and planes are chained ring to ring, slopes, kerbs, ramps and
+ * rolling terrain are followed; the cloud need not be organized (the cells are built from x, y).
+ *
+ * PCL semantics (as pcl::PassThrough / pcl::ExtractIndices):
+ *  - `filter(output)` returns the **non-ground** points (what the mover pipeline needs next);
+ *    `setNegative(true)` returns the **ground** points instead.
+ *  - `setKeepOrganized(true)` keeps the input's width/height and replaces filtered-out points by
+ * the user filter value (NaN by default).
+ *  - Points with a non-finite coordinate are neither ground nor non-ground: they are removed in
+ *    both modes (and reported by getRemovedIndices()).
+ *  - `getRemovedIndices()` works when the filter was built with `extract_removed_indices = true`.
+ *  - Only the points in `indices_` (setIndices) are considered.
+ *
+ * Sampling is deterministic: PCL's sample-consensus models are created with `random = false`
+ * (fixed seed) and cells are always visited in the same order, so the same input gives the same
+ * output.
+ */
+template <typename PointT>
+class GroundPlaneFilter : public pcl::FilterIndices<PointT> {
+ protected:
+  using PointCloud = typename pcl::FilterIndices<PointT>::PointCloud;
+  using pcl::FilterIndices<PointT>::negative_;
+  using pcl::FilterIndices<PointT>::keep_organized_;
+  using pcl::FilterIndices<PointT>::user_filter_value_;
+  using pcl::Filter<PointT>::filter_name_;
+  using pcl::Filter<PointT>::extract_removed_indices_;
+  using pcl::Filter<PointT>::removed_indices_;
+  using pcl::PCLBase<PointT>::input_;
+  using pcl::PCLBase<PointT>::indices_;
+
+ public:
+  using Ptr = pcl::shared_ptr<GroundPlaneFilter<PointT>>;
+  using ConstPtr = pcl::shared_ptr<const GroundPlaneFilter<PointT>>;
+
+  /** \brief A plane n·p + d = 0 with n the unit upward normal (n.z > 0). */
+  struct Plane {
+    Eigen::Vector3f normal = Eigen::Vector3f::UnitZ();
+    float d = 0.f;
+    /** \brief Signed height of p above the plane [m]. */
+    float height(const Eigen::Vector3f& p) const { return normal.dot(p) + d; }
+  };
+
+  /** \param extract_removed_indices set to true to be able to call getRemovedIndices(). */
+  explicit GroundPlaneFilter(bool extract_removed_indices = false);
+
+  /** \brief Points whose height above their cell's plane is below this are ground [m]
+   * (default 0.1). */
+  void setDistanceThreshold(float threshold) { distance_threshold_ = threshold; }
+  float getDistanceThreshold() const { return distance_threshold_; }
+
+  /** \brief Inlier distance of the sample-consensus fit [m] (default 0.1). */
+  void setFitThreshold(float threshold) { fit_threshold_ = threshold; }
+  float getFitThreshold() const { return fit_threshold_; }
+
+  /** \brief Steepest plane still taken for ground [rad] (default 10°); steeper fits fall back to
+   * the prior plane. */
+  void setMaxTilt(float radians) { max_tilt_ = radians; }
+  float getMaxTilt() const { return max_tilt_; }
+
+  /** \brief Largest height jump [m] between a cell's plane and its prior at the cell centre
+   * (default 0.5), plus `getMaxSlopeChange()` per metre between the two cell centres. */
+  void setMaxStep(float step) { max_step_ = step; }
+  float getMaxStep() const { return max_step_; }
+
+  /** \brief Height change allowed per metre of distance to the prior cell (default 0.1, ~6°):
+   * how much the terrain may bend between rings. */
+  void setMaxSlopeChange(float slope) { max_slope_change_ = slope; }
+  float getMaxSlopeChange() const { return max_slope_change_; }
+
+  /** \brief Height of the sensor above the ground under it [m] (default 1.73, KITTI's HDL-64E);
+   * the innermost cells start from a horizontal plane this far below `sensor_origin_`. */
+  void setSensorHeight(float height) { sensor_height_ = height; }
+  float getSensorHeight() const { return sensor_height_; }
+
+  /** \brief Number of equal azimuth sectors (default 32). */
+  void setNumSectors(int sectors) { num_sectors_ = sectors; }
+  int getNumSectors() const { return num_sectors_; }
+
+  /** \brief Radial cell edges [m], increasing, starting at 0; points beyond the last edge go to the
+   * outermost ring. Default {0, 6, 8, 10, 12.5, 15, 18, 21.5, 25.5, 30, 35, 41, 48, 57, 68, 82}. */
+  void setRingEdges(const std::vector<float>& edges) { ring_edges_ = edges; }
+  const std::vector<float>& getRingEdges() const { return ring_edges_; }
+
+  /** \brief Fewest points for a cell to get its own plane (default 12); sparser cells inherit. */
+  void setMinPointsPerCell(int n) { min_points_per_cell_ = n; }
+  int getMinPointsPerCell() const { return min_points_per_cell_; }
+
+  /** \brief Most points one cell's RANSAC sees (default 64, an evenly strided subsample). */
+  void setMaxSamples(int n) { max_samples_ = n; }
+  int getMaxSamples() const { return max_samples_; }
+
+  /** \brief RANSAC iteration cap per cell (default 40; the inlier ratio is high so RANSAC's own
+   * adaptive stop usually ends far earlier). */
+  void setMaxIterations(int n) { max_iterations_ = n; }
+  int getMaxIterations() const { return max_iterations_; }
+
+  /** \brief Plane used by each cell in the last run, ring-major (ring * sectors + sector). */
+  const std::vector<Plane>& getCellPlanes() const { return cell_planes_; }
+  /** \brief Whether each cell of the last run fitted its own plane (false = inherited). */
+  const std::vector<std::uint8_t>& getCellFitted() const { return cell_fitted_; }
+
+ protected:
+  /** \brief Fills `indices` with the non-ground (or, when negative, ground) points. */
+  void applyFilter(pcl::Indices& indices) override;
+
+  using SacModel = pcl::SampleConsensusModelPerpendicularPlane<PointT>;
+  using SacModelPtr = typename SacModel::Ptr;
+
+  /** \brief Fits one cell's plane to `candidates` (RANSAC + least squares); false when the fit
+   * fails or is too steep or too far from `prior` (more than `band` at `centre`). */
+  bool fitPlane(const pcl::Indices& candidates, const Plane& prior, float band,
+                const Eigen::Vector2f& centre, SacModelPtr& model,
+                pcl::RandomSampleConsensus<PointT>& ransac, Plane& fitted) const;
+
+  /** \brief Ring of a horizontal distance r (binary search over ring_edges_). */
+  int ringOf(float r) const;
+
+  float distance_threshold_ = 0.1f;
+  float fit_threshold_ = 0.1f;
+  float max_tilt_ = 0.1745f;  // 10°
+  float max_step_ = 0.5f;
+  float max_slope_change_ = 0.1f;
+  float sensor_height_ = 1.73f;
+  int num_sectors_ = 32;
+  std::vector<float> ring_edges_{0.f,   6.f,  8.f,  10.f, 12.5f, 15.f, 18.f, 21.5f,
+                                 25.5f, 30.f, 35.f, 41.f, 48.f,  57.f, 68.f, 82.f};
+  int min_points_per_cell_ = 12;
+  int max_samples_ = 64;
+  int max_iterations_ = 40;
+
+  std::vector<Plane> cell_planes_;
+  std::vector<std::uint8_t> cell_fitted_;
+};
+
+}  // namespace pcl_movers
+
+#ifdef PCL_NO_PRECOMPILE
+#include <pcl_movers/impl/ground_plane_filter.hpp>
+#endif

@@ -1,0 +1,258 @@
+/*
+ * SPDX-License-Identifier: BSD-3-Clause
+ */
+#pragma once
+
+#include <pcl_movers/ground_plane_filter.h>
+
+#include <pcl/sample_consensus/ransac.h>
+#include <pcl/sample_consensus/sac_model_perpendicular_plane.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace pcl_movers {
+namespace detail {
+
+/** \brief A monotone stand-in for atan2 in [0, 4) ("diamond angle"): sectors are cut on it to
+ * avoid one atan2 per point; equal pseudo-angle sectors differ from equal-angle ones by at most
+ * a factor ~1.4 in width, which is harmless for ground cells. */
+inline float diamondAngle(float dx, float dy) {
+  if (dy >= 0.f) return dx >= 0.f ? dy / (dx + dy) : 1.f - dx / (-dx + dy);
+  return dx < 0.f ? 2.f - dy / (-dx - dy) : 3.f + dx / (dx - dy);
+}
+
+/** \brief Unit direction (x, y) of diamond angle t in [0, 4). */
+inline Eigen::Vector2f diamondDirection(float t) {
+  Eigen::Vector2f v;
+  if (t < 1.f)
+    v = {1.f - t, t};
+  else if (t < 2.f)
+    v = {1.f - t, 2.f - t};
+  else if (t < 3.f)
+    v = {t - 3.f, 2.f - t};
+  else
+    v = {t - 3.f, t - 4.f};
+  return v.normalized();
+}
+
+}  // namespace detail
+
+template <typename PointT>
+GroundPlaneFilter<PointT>::GroundPlaneFilter(bool extract_removed_indices)
+    : pcl::FilterIndices<PointT>(extract_removed_indices) {
+  filter_name_ = "GroundPlaneFilter";
+}
+
+template <typename PointT>
+int GroundPlaneFilter<PointT>::ringOf(float r) const {
+  // upper_bound - 1: the last edge <= r; edges start at 0 so the result is >= 0.
+  const auto it = std::upper_bound(ring_edges_.begin(), ring_edges_.end(), r);
+  return static_cast<int>(it - ring_edges_.begin()) - 1;
+}
+
+template <typename PointT>
+bool GroundPlaneFilter<PointT>::fitPlane(const pcl::Indices& candidates, const Plane& prior,
+                                         float band, const Eigen::Vector2f& centre,
+                                         SacModelPtr& model,
+                                         pcl::RandomSampleConsensus<PointT>& ransac,
+                                         Plane& fitted) const {
+  // RANSAC on an evenly strided subsample: the inlier ratio is high, so a few dozen points and
+  // iterations find the plane; the refit below uses every inlier of the subsample.
+  const std::size_t stride =
+      (candidates.size() + static_cast<std::size_t>(max_samples_) - 1) / max_samples_;
+  pcl::IndicesPtr sample(new pcl::Indices);
+  for (std::size_t j = 0; j < candidates.size(); j += stride) sample->push_back(candidates[j]);
+  model->setIndices(sample);
+  if (!ransac.computeModel()) return false;
+  pcl::Indices inliers;
+  ransac.getInliers(inliers);
+  if (inliers.size() < 6) return false;  // too few to refit (PCL needs more than 3)
+  Eigen::VectorXf coefficients, refined;
+  ransac.getModelCoefficients(coefficients);
+  model->optimizeModelCoefficients(inliers, coefficients, refined);
+  Eigen::Vector3f normal = refined.head<3>();
+  const float norm = normal.norm();
+  if (!(norm > 0.f) || !std::isfinite(refined[3])) return false;
+  float d = refined[3] / norm;
+  normal /= norm;
+  if (normal.z() < 0.f) {
+    normal = -normal;
+    d = -d;
+  }
+  // The least-squares refit is not bound by the tilt limit: check again.
+  if (normal.z() < std::cos(max_tilt_)) return false;
+  // Inliers on one scan line (a narrow radial extent) fix the height but not the slope along
+  // the range direction: keep the prior's orientation, take only the height from the fit.
+  const Eigen::Vector3f origin = input_->sensor_origin_.template head<3>();
+  float r_min = std::numeric_limits<float>::max(), r_max = 0.f;
+  Eigen::Vector3f mean = Eigen::Vector3f::Zero();
+  for (const auto i : inliers) {
+    const Eigen::Vector3f p = (*input_)[i].getVector3fMap();
+    const float r = (p - origin).template head<2>().norm();
+    r_min = std::min(r_min, r);
+    r_max = std::max(r_max, r);
+    mean += p;
+  }
+  mean /= static_cast<float>(inliers.size());
+  if (r_max - r_min < 1.0f) {
+    normal = prior.normal;
+    d = -normal.dot(mean);
+  }
+  fitted.normal = normal;
+  fitted.d = d;
+  // Continuity with the prior at the cell centre: a jump larger than a kerb or a slope change
+  // means the fit locked onto something else (a car bonnet, a low wall).
+  auto zAt = [&centre](const Plane& pl) {
+    return -(pl.d + pl.normal.x() * centre.x() + pl.normal.y() * centre.y()) / pl.normal.z();
+  };
+  return std::abs(zAt(fitted) - zAt(prior)) <= band;
+}
+
+template <typename PointT>
+void GroundPlaneFilter<PointT>::applyFilter(pcl::Indices& indices) {
+  indices.clear();
+  removed_indices_->clear();
+  cell_planes_.clear();
+  cell_fitted_.clear();
+
+  bool edges_ok = !ring_edges_.empty() && ring_edges_.front() == 0.f;
+  for (std::size_t i = 1; i < ring_edges_.size(); ++i)
+    edges_ok = edges_ok && ring_edges_[i] > ring_edges_[i - 1];
+  if (!edges_ok || num_sectors_ < 1 || !(distance_threshold_ > 0.f) || !(fit_threshold_ > 0.f) ||
+      !(max_tilt_ >= 0.f) || max_samples_ < 3 || max_iterations_ < 1) {
+    PCL_ERROR(
+        "[pcl_movers::%s::applyFilter] Invalid parameters (ring edges must start at 0 and "
+        "increase; sectors, thresholds, samples and iterations must be positive).\n",
+        filter_name_.c_str());
+    // Nothing was classified: report every point as removed so callers do not mistake an
+    // error for "no ground".
+    if (extract_removed_indices_) *removed_indices_ = *indices_;
+    return;
+  }
+
+  const int rings = static_cast<int>(ring_edges_.size());
+  const int sectors = num_sectors_;
+  const int num_cells = rings * sectors;
+  const Eigen::Vector3f origin = input_->sensor_origin_.template head<3>();
+  const std::size_t n = indices_->size();
+
+  // Pass 1: cell of every point (-1 = not finite), counting sort into cells.
+  std::vector<int> cell_of(n);
+  std::vector<int> cell_start(num_cells + 1, 0);
+  const float sector_scale = static_cast<float>(sectors) / 4.f;
+  for (std::size_t k = 0; k < n; ++k) {
+    const PointT& p = (*input_)[(*indices_)[k]];
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
+      cell_of[k] = -1;
+      continue;
+    }
+    const float dx = p.x - origin.x(), dy = p.y - origin.y();
+    const float r = std::sqrt(dx * dx + dy * dy);
+    const int ring = ringOf(r);
+    const int sector =
+        r > 0.f
+            ? std::min(static_cast<int>(detail::diamondAngle(dx, dy) * sector_scale), sectors - 1)
+            : 0;
+    const int cell = ring * sectors + sector;
+    cell_of[k] = cell;
+    ++cell_start[cell + 1];
+  }
+  for (int c = 0; c < num_cells; ++c) cell_start[c + 1] += cell_start[c];
+  std::vector<int> cell_points(cell_start[num_cells]);
+  {
+    std::vector<int> fill(cell_start.begin(), cell_start.end() - 1);
+    for (std::size_t k = 0; k < n; ++k)
+      if (cell_of[k] >= 0) cell_points[fill[cell_of[k]]++] = (*indices_)[k];
+  }
+
+  // Pass 2: planes, ring by ring from the sensor outwards, each cell seeded by its inner neighbour.
+  cell_planes_.assign(num_cells, Plane());
+  cell_fitted_.assign(num_cells, 0);
+  std::vector<Eigen::Vector2f> sector_dirs(sectors);
+  for (int s = 0; s < sectors; ++s)
+    sector_dirs[s] = detail::diamondDirection((static_cast<float>(s) + 0.5f) / sector_scale);
+  auto ringCentre = [&](int ring) {
+    if (ring + 1 < rings) return 0.5f * (ring_edges_[ring] + ring_edges_[ring + 1]);
+    return ring_edges_[ring] +
+           0.5f * (ring_edges_[ring] - (ring > 0 ? ring_edges_[ring - 1] : 0.f));
+  };
+
+  SacModelPtr model(new SacModel(input_, /*random=*/false));
+  model->setAxis(Eigen::Vector3f::UnitZ());
+  model->setEpsAngle(max_tilt_);
+  pcl::RandomSampleConsensus<PointT> ransac(model, fit_threshold_);
+  ransac.setMaxIterations(max_iterations_);
+  ransac.setProbability(0.99);
+
+  Plane start;
+  start.normal = Eigen::Vector3f::UnitZ();
+  start.d = -(origin.z() - sensor_height_);
+  pcl::Indices candidates;
+
+  for (int ring = 0; ring < rings; ++ring) {
+    const float centre_r = ringCentre(ring);
+    const float prior_r = ring > 0 ? ringCentre(ring - 1) : 0.f;
+    const float band = max_step_ + max_slope_change_ * (centre_r - prior_r);
+    for (int s = 0; s < sectors; ++s) {
+      const int cell = ring * sectors + s;
+      const Plane& prior = ring > 0 ? cell_planes_[cell - sectors] : start;
+      cell_planes_[cell] = prior;
+      const int count = cell_start[cell + 1] - cell_start[cell];
+      if (count < min_points_per_cell_) continue;
+
+      // Only points near the prior can be this cell's ground: keeps roofs and walls out.
+      candidates.clear();
+      for (int j = cell_start[cell]; j < cell_start[cell + 1]; ++j) {
+        const PointT& p = (*input_)[cell_points[j]];
+        if (std::abs(prior.height(p.getVector3fMap())) < band) candidates.push_back(cell_points[j]);
+      }
+      if (static_cast<int>(candidates.size()) < min_points_per_cell_) continue;
+      const Eigen::Vector2f c2 = origin.head<2>() + centre_r * sector_dirs[s];
+      Plane fitted;
+      bool ok = false;
+      // A plane floating above real ground (the horizontal slice through a car's body, a bonnet,
+      // a hedge top) leaves points clearly below it: drop it and everything above, fit again.
+      for (int attempt = 0; attempt < 3; ++attempt) {
+        if (static_cast<int>(candidates.size()) < min_points_per_cell_) break;
+        if (!fitPlane(candidates, prior, band, c2, model, ransac, fitted)) break;
+        std::size_t below = 0;
+        for (const auto i : candidates)
+          below += fitted.height((*input_)[i].getVector3fMap()) < -2.f * fit_threshold_;
+        if (below < std::max<std::size_t>(min_points_per_cell_ / 2, candidates.size() / 20)) {
+          ok = true;
+          break;
+        }
+        std::size_t kept = 0;
+        for (const auto i : candidates)
+          if (fitted.height((*input_)[i].getVector3fMap()) < -fit_threshold_)
+            candidates[kept++] = i;
+        candidates.resize(kept);
+      }
+      if (!ok) continue;
+      cell_planes_[cell] = fitted;
+      cell_fitted_[cell] = 1;
+    }
+  }
+
+  // Pass 3: classify in input order so the output keeps the input's point order.
+  indices.reserve(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const int idx = (*indices_)[k];
+    if (cell_of[k] < 0) {
+      if (extract_removed_indices_) removed_indices_->push_back(idx);
+      continue;
+    }
+    const bool ground = std::abs(cell_planes_[cell_of[k]].height((*input_)[idx].getVector3fMap())) <
+                        distance_threshold_;
+    if (ground == negative_)
+      indices.push_back(idx);
+    else if (extract_removed_indices_)
+      removed_indices_->push_back(idx);
+  }
+}
+
+}  // namespace pcl_movers
+
+#define PCL_MOVERS_INSTANTIATE_GroundPlaneFilter(T) template class pcl_movers::GroundPlaneFilter<T>;

@@ -1,0 +1,203 @@
+/*
+ * SPDX-License-Identifier: BSD-3-Clause
+ */
+#pragma once
+
+#include <pcl_movers/common.h>
+#include <pcl_movers/ground_plane_filter.h>
+#include <pcl_movers/mover_detector.h>
+#if __has_include(<pcl_movers/range_image_organizer.h>)
+#include <pcl_movers/range_image_organizer.h>
+#define PCL_MOVERS_HAVE_ORGANIZER 1
+#endif
+#include <pcl_movers/range_image_region_growing.h>
+
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+namespace pcl_movers {
+
+template <typename PointT>
+const std::vector<std::string>& MoverDetector<PointT>::stageNames() {
+  static const std::vector<std::string> names{"organize", "ground",    "segment",
+                                              "transform", "track",    "total"};
+  return names;
+}
+
+template <typename PointT>
+void MoverDetector<PointT>::setParameters(const DetectorParameters& parameters) {
+  parameters.validate();
+  parameters_ = parameters;
+  tracker_.setParameters(parameters);
+  tracker_.reset();
+  if (!has_sensor_model_ && parameters.sensor != "auto")
+    sensor_model_ = SensorModel::fromName(parameters.sensor);
+}
+
+template <typename PointT>
+typename MoverDetector<PointT>::PointCloudConstPtr MoverDetector<PointT>::organize(
+    const PointCloudConstPtr& scan) {
+  if (scan->isOrganized() && scan->height > 1) return scan;
+  if (!has_sensor_model_ && sensor_model_.rows() == 0) {
+    // "auto": estimate the beam layout once, from the first unorganized scan.
+    sensor_model_ = SensorModel::estimate(*scan);
+    has_sensor_model_ = true;
+  }
+  PointCloudPtr organized(new PointCloud);
+#ifdef PCL_MOVERS_HAVE_ORGANIZER
+  RangeImageOrganizer<PointT> organizer;
+  organizer.setSensorModel(sensor_model_);
+  organizer.setInputCloud(scan);
+  organizer.organize(*organized);
+#else
+  // Plain projection onto the sensor model's grid, nearest return per cell.
+  const int rows = sensor_model_.rows(), cols = sensor_model_.columns();
+  PointT nan_point;
+  nan_point.x = nan_point.y = nan_point.z = std::numeric_limits<float>::quiet_NaN();
+  organized->points.assign(static_cast<std::size_t>(rows) * cols, nan_point);
+  organized->width = cols;
+  organized->height = rows;
+  organized->is_dense = false;
+  std::vector<float> best(organized->size(), std::numeric_limits<float>::max());
+  for (const auto& pt : scan->points) {
+    if (!std::isfinite(pt.x) || !std::isfinite(pt.y) || !std::isfinite(pt.z)) continue;
+    const float rxy = std::hypot(pt.x, pt.y);
+    const int r = sensor_model_.rowOf(std::atan2(pt.z, rxy));
+    const int c = sensor_model_.columnOf(std::atan2(pt.y, pt.x));
+    if (r < 0 || c < 0) continue;
+    const std::size_t k = static_cast<std::size_t>(r) * cols + c;
+    const float range = rxy * rxy + pt.z * pt.z;
+    if (range < best[k]) {
+      best[k] = range;
+      organized->points[k] = pt;
+    }
+  }
+#endif
+  return organized;
+}
+
+template <typename PointT>
+void MoverDetector<PointT>::process(const PointCloudConstPtr& scan, const Eigen::Isometry3d& pose,
+                                    double time, int frame, FrameResult& result) {
+  using Clock = std::chrono::steady_clock;
+  auto ms = [](Clock::time_point a, Clock::time_point b) {
+    return std::chrono::duration<double, std::milli>(b - a).count();
+  };
+  const auto& p = parameters_;
+  if (!scan || scan->empty()) throw InputError("frame " + std::to_string(frame) + ": empty scan");
+
+  result = FrameResult();
+  result.frame = frame;
+  result.time = time;
+  timings_.clear();
+
+  // Organize.
+  const auto t0 = Clock::now();
+  const PointCloudConstPtr organized = organize(scan);
+  result.organized = organized;
+  const std::size_t n = organized->size();
+  std::size_t finite = 0;
+  for (const auto& pt : organized->points)
+    finite += std::isfinite(pt.x) && std::isfinite(pt.y) && std::isfinite(pt.z);
+  if (finite == 0)
+    throw InputError("frame " + std::to_string(frame) + ": no finite point in the scan");
+
+  // Ground removal: indices of the non-ground points.
+  const auto t1 = Clock::now();
+  GroundPlaneFilter<PointT> ground;
+  ground.setInputCloud(organized);
+  ground.setDistanceThreshold(static_cast<float>(p.ground_distance));
+  ground.setMaxTilt(static_cast<float>(p.ground_max_slope_deg * M_PI / 180.0));
+  ground.setSensorHeight(static_cast<float>(p.sensor_height));
+  pcl::IndicesPtr objects(new pcl::Indices);
+  ground.filter(*objects);
+
+  // Segmentation of the non-ground points on the range image.
+  const auto t2 = Clock::now();
+  RangeImageRegionGrowing<PointT> segmenter;
+  segmenter.setInputCloud(organized);
+  segmenter.setIndices(objects);
+  segmenter.setDepthThresholdFactor(static_cast<float>(p.depth_ratio));
+  segmenter.setMinDepthThreshold(static_cast<float>(p.depth_min));
+  segmenter.setMaxGap(p.max_gap);
+  segmenter.setMinClusterSize(p.min_cluster_points);
+  std::vector<pcl::PointIndices> clusters;
+  segmenter.segment(clusters);
+  result.clusters = static_cast<int>(clusters.size());
+
+  // World frame: only the cluster points are transformed (the rest is never used again).
+  const auto t3 = Clock::now();
+  const Eigen::Isometry3f pose_f = pose.cast<float>();
+  PointCloudPtr world(new PointCloud);
+  std::vector<pcl::PointIndices> world_clusters(clusters.size());
+  std::size_t total = 0;
+  for (const auto& c : clusters) total += c.indices.size();
+  world->reserve(total);
+  for (std::size_t c = 0; c < clusters.size(); ++c) {
+    world_clusters[c].indices.reserve(clusters[c].indices.size());
+    for (const auto i : clusters[c].indices) {
+      PointT q = (*organized)[i];
+      q.getVector3fMap() = pose_f * q.getVector3fMap();
+      world_clusters[c].indices.push_back(static_cast<int>(world->size()));
+      world->push_back(q);
+    }
+  }
+
+  // Tracking.
+  const auto t4 = Clock::now();
+  tracker_.update(world, world_clusters, pose.translation(), time);
+  const auto t5 = Clock::now();
+
+  // Outputs: rows, indices and labels.
+  result.labels.assign(n, kUnlabelled);
+  result.track_ids.assign(n, -1);
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto& pt = (*organized)[i];
+    if (std::isfinite(pt.x) && std::isfinite(pt.y) && std::isfinite(pt.z))
+      result.labels[i] = kGround;
+  }
+  for (const auto i : *objects) result.labels[i] = kUnlabelled;
+  const Eigen::Isometry3d world_to_sensor = pose.inverse();
+  const Eigen::Matrix3d R = pose.linear();
+  const double pose_yaw = std::atan2(R(1, 0), R(0, 0));
+  const auto& cluster_results = tracker_.getClusterResults();
+  for (std::size_t c = 0; c < clusters.size(); ++c) {
+    const auto& cr = cluster_results[c];
+    if (cr.track_id < 0) continue;
+    const std::uint8_t label = cr.mover ? kMover : kStatic;
+    for (const auto i : clusters[c].indices) {
+      result.labels[i] = label;
+      result.track_ids[i] = cr.track_id;
+    }
+    io::TrackRow row;
+    row.frame = frame;
+    row.time = time;
+    row.track_id = cr.track_id;
+    row.mover = cr.mover;
+    const Eigen::Vector3d local = world_to_sensor * cr.features.centroid;
+    row.x = local.x();
+    row.y = local.y();
+    row.z = local.z();
+    row.wx = cr.features.centroid.x();
+    row.wy = cr.features.centroid.y();
+    row.wz = cr.features.centroid.z();
+    row.vx = cr.velocity.x();
+    row.vy = cr.velocity.y();
+    row.speed = cr.velocity.norm();
+    row.length = cr.features.length;
+    row.width = cr.features.width;
+    row.height = cr.features.height;
+    // Box yaw in the sensor frame, like objects.txt.
+    row.yaw = std::remainder(cr.features.yaw - pose_yaw, M_PI);
+    row.similarity = cr.similarity;
+    row.points = cr.features.points;
+    result.rows.push_back(row);
+    result.cluster_indices.push_back(clusters[c]);
+  }
+
+  timings_ = {{"organize", ms(t0, t1)}, {"ground", ms(t1, t2)},   {"segment", ms(t2, t3)},
+              {"transform", ms(t3, t4)}, {"track", ms(t4, t5)}, {"total", ms(t0, t5)}};
+}
+
+}  // namespace pcl_movers

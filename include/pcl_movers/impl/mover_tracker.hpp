@@ -1,0 +1,336 @@
+/*
+ * SPDX-License-Identifier: BSD-3-Clause
+ */
+#pragma once
+
+#include <pcl_movers/mover_tracker.h>
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace pcl_movers {
+
+template <typename PointT>
+typename MoverTracker<PointT>::ClusterFeatures MoverTracker<PointT>::computeFeatures(
+    const PointCloud& cloud, const pcl::Indices& indices) {
+  ClusterFeatures f;
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  double sxx = 0, sxy = 0, syy = 0;
+  double min_z = std::numeric_limits<double>::max(), max_z = -min_z;
+  int n = 0;
+  for (const auto i : indices) {
+    const auto& p = cloud[i];
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
+    sum += Eigen::Vector3d(p.x, p.y, p.z);
+    min_z = std::min<double>(min_z, p.z);
+    max_z = std::max<double>(max_z, p.z);
+    ++n;
+  }
+  f.points = n;
+  if (n == 0) return f;
+  f.centroid = sum / n;
+  for (const auto i : indices) {
+    const auto& p = cloud[i];
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
+    const double dx = p.x - f.centroid.x(), dy = p.y - f.centroid.y();
+    sxx += dx * dx;
+    sxy += dx * dy;
+    syy += dy * dy;
+  }
+  // Principal horizontal axis: the long side of a car seen from any side dominates the spread.
+  f.yaw = 0.5 * std::atan2(2.0 * sxy, sxx - syy);
+  const double c = std::cos(f.yaw), s = std::sin(f.yaw);
+  double min_u = std::numeric_limits<double>::max(), max_u = -min_u, min_v = min_u, max_v = -min_u;
+  for (const auto i : indices) {
+    const auto& p = cloud[i];
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
+    const double dx = p.x - f.centroid.x(), dy = p.y - f.centroid.y();
+    const double u = c * dx + s * dy, v = -s * dx + c * dy;
+    min_u = std::min(min_u, u);
+    max_u = std::max(max_u, u);
+    min_v = std::min(min_v, v);
+    max_v = std::max(max_v, v);
+  }
+  f.length = max_u - min_u;
+  f.width = max_v - min_v;
+  f.min_z = min_z;
+  f.max_z = max_z;
+  f.height = max_z - min_z;
+  return f;
+}
+
+template <typename PointT>
+const typename MoverTracker<PointT>::Track* MoverTracker<PointT>::findTrack(int id) const {
+  for (const auto& t : tracks_)
+    if (t.id == id) return &t;
+  return nullptr;
+}
+
+template <typename PointT>
+void MoverTracker<PointT>::reset() {
+  tracks_.clear();
+  results_.clear();
+  next_id_ = 0;
+  registrations_ = 0;
+  has_time_ = false;
+}
+
+template <typename PointT>
+void MoverTracker<PointT>::ensurePoints(const PointCloud& cloud, const pcl::PointIndices& indices,
+                                        Candidate& candidate) const {
+  if (candidate.points) return;
+  candidate.points.reset(new PointCloud);
+  candidate.points->reserve(indices.indices.size());
+  for (const auto i : indices.indices) {
+    const auto& p = cloud[i];
+    if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))
+      candidate.points->push_back(p);
+  }
+}
+
+template <typename PointT>
+SurfaceDensity::Ptr MoverTracker<PointT>::makeModel(const Candidate& candidate,
+                                                    const Eigen::Vector3d& sensor_origin) const {
+  const auto& p = parameters_;
+  SurfaceDensity::Ptr model(new SurfaceDensity(
+      p.density_cells_xy, p.density_cells_xy, p.density_cells_z,
+      static_cast<float>(p.density_resolution), static_cast<float>(p.density_resolution_z)));
+  model->setSigmaPerMetre(static_cast<float>(p.sigma_per_metre));
+  model->setMinSigma(static_cast<float>(p.min_sigma));
+  model->compute(*candidate.points, sensor_origin.template cast<float>(),
+                 candidate.features.centroid.template cast<float>());
+  return model;
+}
+
+template <typename PointT>
+bool MoverTracker<PointT>::registerCandidate(const Track& track, Candidate& candidate,
+                                             const Eigen::Vector2d& predicted,
+                                             double search_radius,
+                                             const Eigen::Vector3d& sensor_origin, Match& match) {
+  const auto& p = parameters_;
+  ++registrations_;
+  registration_.setInputSource(candidate.points);
+  registration_.setTargetDensity(track.model);
+  registration_.setSensorOrigin(sensor_origin.template cast<float>());
+  registration_.setResolution(static_cast<float>(p.density_resolution));
+  registration_.setSearchRadius(static_cast<float>(search_radius));
+  registration_.setYawSamples(p.yaw_samples);
+  registration_.setSigmaPerMetre(static_cast<float>(p.sigma_per_metre));
+  registration_.setMinSigma(static_cast<float>(p.min_sigma));
+  registration_.setMinSimilarity(static_cast<float>(p.min_similarity));
+  // The guess moves the predicted reference point onto the model centre; heights stay (objects
+  // move on the ground, the grid is 2.8 m tall).
+  const Eigen::Vector3f centre = track.model->getCentre();
+  Eigen::Matrix4f guess = Eigen::Matrix4f::Identity();
+  guess(0, 3) = centre.x() - static_cast<float>(predicted.x());
+  guess(1, 3) = centre.y() - static_cast<float>(predicted.y());
+  PointCloud aligned;
+  registration_.align(aligned, guess);
+  if (!registration_.hasConverged()) return false;
+  const double similarity = registration_.getSimilarity();
+  if (!(similarity >= p.min_similarity)) return false;
+  // The reference point is the one the registration maps onto the model centre.
+  const Eigen::Matrix4f T = registration_.getFinalTransformation();
+  const Eigen::Vector4f ref = T.inverse() * Eigen::Vector4f(centre.x(), centre.y(), centre.z(), 1);
+  match.measurement = ref.template head<3>().template cast<double>();
+  match.similarity = similarity;
+  match.score = similarity;
+  const auto view = registration_.getSourceDensity();
+  if (view) match.view.reset(new SurfaceDensity(*view));
+  return true;
+}
+
+template <typename PointT>
+void MoverTracker<PointT>::decideMover(Track& track) const {
+  const auto& p = parameters_;
+  track.mover = false;
+  if (track.large || track.hits < p.mover_min_age) return;
+  if (track.features.height < p.min_mover_height) return;
+  int votes = 0;
+  for (const char f : track.fast) votes += f;
+  if (votes < p.mover_votes) return;
+  const auto& first = track.history.front();
+  const auto& last = track.history.back();
+  const double elapsed = last.z() - first.z();
+  if (elapsed <= 0) return;
+  const double displacement = (last.template head<2>() - first.template head<2>()).norm();
+  track.mover = displacement >= p.displacement_ratio * p.mover_speed * elapsed;
+}
+
+template <typename PointT>
+void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
+                                  const std::vector<pcl::PointIndices>& clusters,
+                                  const Eigen::Vector3d& sensor_origin, double time) {
+  const auto& p = parameters_;
+  const bool use_registration = p.mode != "centroid";
+  results_.assign(clusters.size(), ClusterResult());
+  registrations_ = 0;
+  const double dt = has_time_ ? std::max(0.0, time - last_time_) : 0.0;
+  has_time_ = true;
+  last_time_ = time;
+
+  // 1. predict
+  for (auto& t : tracks_) {
+    t.filter.predict(dt);
+    ++t.age;
+  }
+
+  // Candidates.
+  std::vector<Candidate> candidates(clusters.size());
+  for (std::size_t c = 0; c < clusters.size(); ++c) {
+    auto& cand = candidates[c];
+    cand.features = computeFeatures(*cloud, clusters[c].indices);
+    const double range = (cand.features.centroid.template head<2>() - sensor_origin.template head<2>()).norm();
+    cand.usable = cand.features.points >= p.min_cluster_points && range <= p.max_range;
+    cand.features.large =
+        cand.features.length > p.max_mover_length || cand.features.height > p.max_mover_height;
+    results_[c].features = cand.features;
+  }
+
+  // 2.-3. gate and score
+  std::vector<Match> matches;
+  const double accel_term = 0.5 * p.acceleration_limit * dt * dt;
+  for (std::size_t ti = 0; ti < tracks_.size(); ++ti) {
+    const Track& track = tracks_[ti];
+    const Eigen::Vector2d predicted = track.filter.position();
+    const double meas_sigma = track.large || !use_registration ? p.centroid_sigma
+                                                               : p.registration_sigma;
+    const Eigen::Matrix2d S =
+        track.filter.innovationCovariance(Eigen::Matrix2d::Identity() * meas_sigma * meas_sigma);
+    const double sigma = std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(
+                                                     S, Eigen::EigenvaluesOnly)
+                                                     .eigenvalues()
+                                                     .maxCoeff()));
+    const double search = std::min(p.max_gate_radius, p.gate_sigmas * sigma + accel_term);
+    for (std::size_t c = 0; c < candidates.size(); ++c) {
+      auto& cand = candidates[c];
+      if (!cand.usable) continue;
+      const bool centroid_only = !use_registration || track.large || cand.features.large ||
+                                 !track.model;
+      // Big structures: their centroid moves a lot as they come into view, gate generously.
+      const double margin = centroid_only && (track.large || cand.features.large)
+                                ? 0.5 * std::max(track.features.length, cand.features.length)
+                                : p.gate_margin;
+      const double gate = std::min(p.max_gate_radius + margin, search + margin);
+      const double distance = (cand.features.centroid.template head<2>() - predicted).norm();
+      if (distance > gate) continue;
+      if (std::abs(cand.features.centroid.z() - track.features.centroid.z()) > 1.5) continue;
+      Match m;
+      m.track = ti;
+      m.cluster = c;
+      if (centroid_only) {
+        m.measurement = cand.features.centroid;
+        m.score = -distance;  // below every B, so registered matches are assigned first
+        m.similarity = 0;
+      } else {
+        ensurePoints(*cloud, clusters[c], cand);
+        if (!registerCandidate(track, cand, predicted, std::max(search, 2 * p.density_resolution),
+                               sensor_origin, m))
+          continue;
+      }
+      matches.push_back(std::move(m));
+    }
+  }
+
+  // 4. greedy assignment, best score first
+  std::sort(matches.begin(), matches.end(),
+            [](const Match& a, const Match& b) { return a.score > b.score; });
+  std::vector<char> track_used(tracks_.size(), 0), cluster_used(candidates.size(), 0);
+  const float half_life_weight =
+      SurfaceDensity::halfLifeWeight(static_cast<float>(p.model_half_life));
+  for (const auto& m : matches) {
+    if (track_used[m.track] || cluster_used[m.cluster]) continue;
+    track_used[m.track] = cluster_used[m.cluster] = 1;
+    Track& t = tracks_[m.track];
+    const auto& cand = candidates[m.cluster];
+    const bool registered = m.score >= 0 && m.similarity > 0;
+    const double meas_sigma = registered ? p.registration_sigma : p.centroid_sigma;
+    const Eigen::Vector2d v_before = t.filter.velocity();
+    const double since = std::max(1e-3, time - t.last_time);
+    t.filter.update(m.measurement.template head<2>(),
+                    Eigen::Matrix2d::Identity() * meas_sigma * meas_sigma);
+    // Acceleration limit on established tracks: the filter's velocity may not change faster than a
+    // vehicle can accelerate (a single bad measurement cannot make a static object a mover).
+    if (t.hits >= p.mover_min_age) {
+      Eigen::Vector2d dv = t.filter.velocity() - v_before;
+      const double limit = p.acceleration_limit * since;
+      if (dv.norm() > limit) {
+        dv *= limit / dv.norm();
+        auto state = t.filter.getState();
+        state.template tail<2>() = v_before + dv;
+        t.filter.setState(state);
+      }
+    }
+    t.z = m.measurement.z();
+    t.last_time = time;
+    ++t.hits;
+    t.missed = 0;
+    t.similarity = m.similarity;
+    t.features = cand.features;
+    t.large = t.large || cand.features.large;
+    t.fast.push_back(t.filter.speed() > p.mover_speed ? 1 : 0);
+    while (static_cast<int>(t.fast.size()) > p.mover_window) t.fast.pop_front();
+    t.history.emplace_back(m.measurement.x(), m.measurement.y(), time);
+    while (static_cast<int>(t.history.size()) > p.mover_window + 1) t.history.pop_front();
+    if (registered && m.view && t.model) {
+      try {
+        t.model->accumulate(*m.view, half_life_weight);
+      } catch (const std::exception&) {
+        // Grids always match (same parameters); keep the old model if they ever do not.
+      }
+    }
+    decideMover(t);
+    auto& r = results_[m.cluster];
+    r.track_id = t.id;
+    r.mover = t.mover;
+    r.similarity = t.similarity;
+    r.velocity = t.filter.velocity();
+  }
+
+  // 5. coast / delete unmatched tracks
+  std::vector<Track> kept;
+  kept.reserve(tracks_.size() + candidates.size());
+  for (std::size_t ti = 0; ti < tracks_.size(); ++ti) {
+    Track& t = tracks_[ti];
+    if (!track_used[ti]) {
+      ++t.missed;
+      // A track seen only once is likely clutter: it does not coast.
+      if (t.missed > p.max_missed_frames || (t.hits < 2 && t.missed > 1)) continue;
+    }
+    kept.push_back(std::move(t));
+  }
+  tracks_ = std::move(kept);
+
+  // Births.
+  for (std::size_t c = 0; c < candidates.size(); ++c) {
+    auto& cand = candidates[c];
+    if (cluster_used[c] || !cand.usable) continue;
+    if (static_cast<int>(tracks_.size()) >= p.max_tracks) break;
+    Track t;
+    t.id = next_id_++;
+    t.filter.setAccelerationNoise(p.acceleration_noise);
+    const double sigma = cand.features.large || !use_registration ? p.centroid_sigma
+                                                                   : p.registration_sigma;
+    t.filter.initialize(cand.features.centroid.template head<2>(),
+                        Eigen::Matrix2d::Identity() * sigma * sigma, Eigen::Vector2d::Zero(),
+                        p.initial_velocity_sigma);
+    t.z = cand.features.centroid.z();
+    t.last_time = time;
+    t.hits = 1;
+    t.features = cand.features;
+    t.large = cand.features.large;
+    t.fast.push_back(0);
+    t.history.emplace_back(cand.features.centroid.x(), cand.features.centroid.y(), time);
+    if (use_registration && !t.large) {
+      ensurePoints(*cloud, clusters[c], cand);
+      t.model = makeModel(cand, sensor_origin);
+    }
+    auto& r = results_[c];
+    r.track_id = t.id;
+    tracks_.push_back(std::move(t));
+  }
+}
+
+}  // namespace pcl_movers

@@ -1,0 +1,123 @@
+/*
+ * SPDX-License-Identifier: BSD-3-Clause
+ */
+#pragma once
+
+#include <pcl_movers/detector_parameters.h>
+#include <pcl_movers/io/tracks.h>
+#include <pcl_movers/mover_tracker.h>
+#include <pcl_movers/sensor_model.h>
+
+#include <pcl/PointIndices.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace pcl_movers {
+
+/** \brief The whole mover-detection pipeline for one frame (DESIGN.md "The pipeline"):
+ * organize (when the scan is not organized yet) → GroundPlaneFilter → RangeImageRegionGrowing →
+ * world frame (the frame's pose) → MoverTracker.
+ *
+ * \code
+ * pcl_movers::MoverDetector<pcl::PointXYZI> detector;
+ * detector.setParameters(params);
+ * for (std::size_t i = 0; i < reader.size(); ++i) {
+ *   reader.read(i, *scan);
+ *   pcl_movers::MoverDetector<pcl::PointXYZI>::FrameResult result;
+ *   detector.process(scan, reader.pose(i), reader.time(i), int(i), result);
+ *   rows.insert(rows.end(), result.rows.begin(), result.rows.end());
+ * }
+ * \endcode
+ *
+ * Each call returns, for every cluster with a track, its io::TrackRow (as written to tracks.csv),
+ * the indices of its points in the organized sensor-frame cloud, and per-point labels of that
+ * cloud (ground / static / mover and the track id) for labelled output. getTimings() gives the
+ * milliseconds each stage took on the last frame.
+ */
+template <typename PointT>
+class MoverDetector {
+ public:
+  using PointCloud = pcl::PointCloud<PointT>;
+  using PointCloudPtr = typename PointCloud::Ptr;
+  using PointCloudConstPtr = typename PointCloud::ConstPtr;
+  using Ptr = pcl::shared_ptr<MoverDetector<PointT>>;
+  using ConstPtr = pcl::shared_ptr<const MoverDetector<PointT>>;
+
+  /** \brief Per-point class in FrameResult::labels. */
+  enum Label : std::uint8_t {
+    kUnlabelled = 0,  ///< invalid (NaN), or an object point not in any tracked cluster
+    kGround = 1,
+    kStatic = 2,  ///< in a tracked cluster that is not a mover
+    kMover = 3
+  };
+
+  /** \brief Names of the stages in getTimings(), in order. */
+  static const std::vector<std::string>& stageNames();
+
+  /** \brief Everything one frame produced. */
+  struct FrameResult {
+    int frame = 0;
+    double time = 0;
+    /** One row per cluster with a track (tracks.csv rows of this frame). */
+    std::vector<io::TrackRow> rows;
+    /** Points of rows[i] in `organized`. */
+    std::vector<pcl::PointIndices> cluster_indices;
+    /** The organized sensor-frame scan the indices and labels refer to. */
+    PointCloudConstPtr organized;
+    /** Per point of `organized`: Label, and the track id (-1 when none). */
+    std::vector<std::uint8_t> labels;
+    std::vector<int> track_ids;
+    /** Number of clusters the segmentation produced (before size filtering). */
+    int clusters = 0;
+  };
+
+  MoverDetector() = default;
+
+  /** \brief All stage parameters; validated here (throws InputError). Resets the tracker. */
+  void setParameters(const DetectorParameters& parameters);
+  const DetectorParameters& getParameters() const { return parameters_; }
+
+  /** \brief Sensor layout for organizing unorganized scans (default: parameters' `sensor`
+   * preset; "auto" estimates it from the first unorganized scan). */
+  void setSensorModel(const SensorModel& model) {
+    sensor_model_ = model;
+    has_sensor_model_ = true;
+  }
+  const SensorModel& getSensorModel() const { return sensor_model_; }
+
+  /** \brief Runs the pipeline on one scan (sensor frame) with its sensor→world pose.
+   * Throws InputError when the scan is empty or has no finite point. */
+  void process(const PointCloudConstPtr& scan, const Eigen::Isometry3d& pose, double time,
+               int frame, FrameResult& result);
+
+  /** \brief (stage, milliseconds) of the last process(): organize, ground, segment, transform,
+   * track, total. */
+  const std::vector<std::pair<std::string, double>>& getTimings() const { return timings_; }
+
+  const MoverTracker<PointT>& getTracker() const { return tracker_; }
+
+  /** \brief Forgets all tracks (start of a new sequence). */
+  void reset() { tracker_.reset(); }
+
+ protected:
+  /** \brief Organizes `scan` into a range image (copy when it is already organized). */
+  PointCloudConstPtr organize(const PointCloudConstPtr& scan);
+
+  DetectorParameters parameters_;
+  SensorModel sensor_model_;
+  bool has_sensor_model_ = false;
+  MoverTracker<PointT> tracker_;
+  std::vector<std::pair<std::string, double>> timings_;
+};
+
+}  // namespace pcl_movers
+
+#ifdef PCL_NO_PRECOMPILE
+#include <pcl_movers/impl/mover_detector.hpp>
+#endif

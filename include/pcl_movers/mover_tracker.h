@@ -1,0 +1,179 @@
+/*
+ * SPDX-License-Identifier: BSD-3-Clause
+ */
+#pragma once
+
+#include <pcl_movers/bhattacharya_registration.h>
+#include <pcl_movers/detector_parameters.h>
+#include <pcl_movers/kalman_filter_cv.h>
+#include <pcl_movers/surface_density.h>
+
+#include <pcl/PointIndices.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include <Eigen/Geometry>
+#include <deque>
+#include <vector>
+
+namespace pcl_movers {
+
+/** \brief Tracks every object cluster of a LiDAR sequence and decides which are movers
+ * (Morris et al., section 6).
+ *
+ * Each frame, update() receives the clusters of one scan in the **world** frame. Every track (static
+ * objects too) carries a constant-velocity KalmanFilterCV on its horizontal position and, in the
+ * default registration mode, an accumulated SurfaceDensity model:
+ *
+ *  1. predict all tracks to the frame time;
+ *  2. gate: a cluster is a candidate of a track when its centroid lies within
+ *     `gate_sigmas`·σ (innovation covariance) + ½·`acceleration_limit`·dt² + `gate_margin` of the
+ *     predicted position, at most `max_gate_radius` (the acceleration limit bounds the search);
+ *  3. registration mode: each candidate is registered with BhattacharyaRegistration against the
+ *     track's model, the search window centred on the prediction and as wide as the gate; its
+ *     similarity B is the association score and B < `min_similarity` is not an update (occlusion
+ *     or wrong object). Centroid mode (the paper's "simplest approach", for comparison): the
+ *     measurement is the cluster centroid and the score is minus the centroid distance;
+ *  4. pairs are assigned greedily, best score first, one cluster per track and one track per
+ *     cluster; the Kalman filter is updated with the measured position; the registered view is
+ *     accumulated into the model with a half-life of `model_half_life` frames;
+ *  5. unmatched tracks coast (prediction only) and are deleted after `max_missed_frames`;
+ *     unmatched clusters start new tracks (at most `max_tracks` live tracks);
+ *  6. mover decision: speed > `mover_speed` in `mover_votes` of the last `mover_window` updates,
+ *     at least `mover_min_age` updates, and the net displacement of the measurements over the
+ *     window at least `displacement_ratio`·`mover_speed`·elapsed time (a filter velocity inflated by
+ *     a few noisy measurements does not survive this check).
+ *
+ * The registered measurement is the track's reference point: the model grid is centred where the
+ * object was first seen and the registration maps each new view onto it, so the measured position
+ * is that reference point moved by the registered motion. It does not shift when a different part
+ * of the object is seen, which is the point of registering instead of using centroids.
+ *
+ * Practical limits (documented design choices): clusters longer than `max_mover_length` or taller
+ * than `max_mover_height` (buildings, walls, hedges, tree rows) are tracked by centroid only and are
+ * never movers — registering them would be expensive and their centroids move with the view;
+ * clusters lower than `min_mover_height` are never movers. Tracks and models are bounded: each track
+ * owns one fixed-size grid, tracks die after `max_missed_frames` and their number is capped.
+ */
+template <typename PointT>
+class MoverTracker {
+ public:
+  using PointCloud = pcl::PointCloud<PointT>;
+  using PointCloudPtr = typename PointCloud::Ptr;
+  using PointCloudConstPtr = typename PointCloud::ConstPtr;
+  using Ptr = pcl::shared_ptr<MoverTracker<PointT>>;
+  using ConstPtr = pcl::shared_ptr<const MoverTracker<PointT>>;
+
+  /** \brief Geometry of one cluster in the world frame. */
+  struct ClusterFeatures {
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    double length = 0, width = 0, height = 0;  ///< oriented box in the horizontal plane, z extent
+    double yaw = 0;                            ///< heading of the box's long side [rad], world
+    double min_z = 0, max_z = 0;
+    int points = 0;
+    bool large = false;  ///< longer/taller than any mover: tracked by centroid, never a mover
+  };
+
+  /** \brief One track. Positions and velocities are in the world frame. */
+  struct Track {
+    int id = 0;
+    KalmanFilterCV filter;
+    double z = 0;                ///< height of the reference point (from the last measurement)
+    double last_time = 0;        ///< time of the last update
+    int hits = 0;                ///< updates so far
+    int age = 0;                 ///< frames since birth
+    int missed = 0;              ///< consecutive frames without update
+    bool mover = false;          ///< mover decision after the last update
+    bool large = false;          ///< static structure tracked by centroid
+    double similarity = 0;       ///< B of the last update (0 in centroid mode / at birth)
+    ClusterFeatures features;    ///< geometry of the last cluster assigned
+    std::deque<char> fast;       ///< speed > mover_speed after each of the last updates
+    std::deque<Eigen::Vector3d> history;  ///< (x, y, time) of the last measurements
+    SurfaceDensity::Ptr model;   ///< accumulated surface density (registration mode)
+  };
+
+  /** \brief What happened to one input cluster in the last update(). */
+  struct ClusterResult {
+    int track_id = -1;  ///< -1: not tracked (too small, or the track cap was reached)
+    bool mover = false;
+    double similarity = 0;
+    Eigen::Vector2d velocity = Eigen::Vector2d::Zero();  ///< world [m/s]
+    ClusterFeatures features;
+  };
+
+  MoverTracker() = default;
+
+  /** \brief Uses the tracker and registration entries of `parameters` (validated by the caller). */
+  void setParameters(const DetectorParameters& parameters) { parameters_ = parameters; }
+  const DetectorParameters& getParameters() const { return parameters_; }
+
+  /** \brief Processes one frame.
+   * \param cloud points in the world frame (may be organized with NaN; only cluster points are read)
+   * \param clusters point indices of each object cluster
+   * \param sensor_origin sensor position in the world frame (ranges → density σ)
+   * \param time frame time [s], increasing */
+  void update(const PointCloudConstPtr& cloud, const std::vector<pcl::PointIndices>& clusters,
+              const Eigen::Vector3d& sensor_origin, double time);
+
+  /** \brief Per input cluster of the last update(), in input order. */
+  const std::vector<ClusterResult>& getClusterResults() const { return results_; }
+  /** \brief Live tracks (updated or coasting). */
+  const std::vector<Track>& getTracks() const { return tracks_; }
+  /** \brief The track with this id, or nullptr. */
+  const Track* findTrack(int id) const;
+  /** \brief Number of registrations run in the last update() (for profiling). */
+  int getRegistrationCount() const { return registrations_; }
+  /** \brief Total number of tracks ever started. */
+  int getTracksStarted() const { return next_id_; }
+
+  /** \brief Forgets all tracks. */
+  void reset();
+
+  /** \brief Geometry of a set of points (centroid, oriented box from the horizontal principal
+   * axes). */
+  static ClusterFeatures computeFeatures(const PointCloud& cloud, const pcl::Indices& indices);
+
+ protected:
+  struct Candidate {
+    PointCloudPtr points;  ///< the cluster's points (built lazily in registration mode)
+    ClusterFeatures features;
+    bool usable = false;  ///< enough points to track
+  };
+  struct Match {
+    double score = 0;
+    std::size_t track = 0, cluster = 0;
+    Eigen::Vector3d measurement = Eigen::Vector3d::Zero();
+    double similarity = 0;
+    SurfaceDensity::ConstPtr view;  ///< registered view for model accumulation
+  };
+
+  /** \brief Registers candidate `c` against track `t`'s model around the predicted position. Fills
+   * the measurement (reference point) and similarity; false when registration found no match. */
+  bool registerCandidate(const Track& track, Candidate& candidate, const Eigen::Vector2d& predicted,
+                         double search_radius, const Eigen::Vector3d& sensor_origin, Match& match);
+
+  /** \brief Builds a track's first model from its birth cluster. */
+  SurfaceDensity::Ptr makeModel(const Candidate& candidate,
+                                const Eigen::Vector3d& sensor_origin) const;
+
+  /** \brief Updates the mover flag of a track after an update. */
+  void decideMover(Track& track) const;
+
+  void ensurePoints(const PointCloud& cloud, const pcl::PointIndices& indices,
+                    Candidate& candidate) const;
+
+  DetectorParameters parameters_;
+  std::vector<Track> tracks_;
+  std::vector<ClusterResult> results_;
+  int next_id_ = 0;
+  int registrations_ = 0;
+  bool has_time_ = false;
+  double last_time_ = 0;
+  BhattacharyaRegistration<PointT, PointT> registration_;
+};
+
+}  // namespace pcl_movers
+
+#ifdef PCL_NO_PRECOMPILE
+#include <pcl_movers/impl/mover_tracker.hpp>
+#endif

@@ -1,0 +1,112 @@
+/*
+ * SPDX-License-Identifier: BSD-3-Clause
+ */
+#pragma once
+
+#include <pcl/PointIndices.h>
+#include <pcl/pcl_base.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+namespace pcl_movers {
+
+/** \brief Clusters an organized scan by region growing in angle-depth space (Morris et al.,
+ * section 4: "contiguous region building").
+ *
+ * The organized cloud is the range image: rows are beams, columns azimuth steps. Each valid cell
+ * (finite x, y, z and, when setIndices() was used, listed there) joins its 8 neighbours when their
+ * ranges r_a, r_b (distance from `sensor_origin_`) satisfy
+ *
+ *     |r_a - r_b| <= max(k * min(r_a, r_b), d_min)
+ *
+ * with k = `getDepthThresholdFactor()` — the paper's threshold proportional to depth, because the
+ * spacing between neighbouring samples grows with range — and a small absolute floor
+ * d_min = `getMinDepthThreshold()` for the few points very close to the sensor. For 360° sensors
+ * the first and last column are neighbours (`setWrapAround(true)`, the default), so an object
+ * straddling azimuth ±180° is one cluster.
+ *
+ * Addition to the paper's rule (documented, off with `setMaxGap(0)`): real range images have empty
+ * cells inside objects (dark car windows and tyres return nothing, the organizer leaves holes where
+ * two returns fell in one cell, removed ground leaves gaps at the foot of objects). When the
+ * immediate neighbour in one of the 8 directions is empty, the search continues up to
+ * `getMaxGap()` more cells in that direction and applies the same depth rule to the first valid
+ * cell it meets.
+ *
+ * Implementation: one pass over the image with a flat-array union-find (4 forward directions per
+ * cell, the other 4 are covered by symmetry), then one pass to collect clusters: O(N), no kd-tree.
+ *
+ * Errors: on an unorganized input (height 1 or width*height != size) segment() prints a PCL_ERROR
+ * and returns an empty cluster list; empty or all-NaN clouds give an empty list without error.
+ * Clusters are sorted by size, largest first (as pcl::EuclideanClusterExtraction); the indices of a
+ * cluster are in increasing (row-major) order.
+ */
+template <typename PointT>
+class RangeImageRegionGrowing : public pcl::PCLBase<PointT> {
+ protected:
+  using pcl::PCLBase<PointT>::input_;
+  using pcl::PCLBase<PointT>::indices_;
+  using pcl::PCLBase<PointT>::fake_indices_;
+  using pcl::PCLBase<PointT>::initCompute;
+  using pcl::PCLBase<PointT>::deinitCompute;
+
+ public:
+  using PointCloud = pcl::PointCloud<PointT>;
+  using Ptr = pcl::shared_ptr<RangeImageRegionGrowing<PointT>>;
+  using ConstPtr = pcl::shared_ptr<const RangeImageRegionGrowing<PointT>>;
+
+  RangeImageRegionGrowing() = default;
+
+  /** \brief k in d_T = k · range (default 0.03: at 10 m, neighbours up to 0.3 m apart in depth
+   * join). */
+  void setDepthThresholdFactor(float k) { depth_threshold_factor_ = k; }
+  float getDepthThresholdFactor() const { return depth_threshold_factor_; }
+
+  /** \brief Absolute floor of the depth threshold [m] (default 0.1). */
+  void setMinDepthThreshold(float d) { min_depth_threshold_ = d; }
+  float getMinDepthThreshold() const { return min_depth_threshold_; }
+
+  /** \brief Whether the last and first column are neighbours (default true, 360° sensors). */
+  void setWrapAround(bool wrap) { wrap_around_ = wrap; }
+  bool getWrapAround() const { return wrap_around_; }
+
+  /** \brief Empty cells bridged in each direction (default 2; 0 = the paper's strict 8-neighbour
+   * rule). */
+  void setMaxGap(int gap) { max_gap_ = gap; }
+  int getMaxGap() const { return max_gap_; }
+
+  /** \brief Clusters with fewer points are dropped (default 1). */
+  void setMinClusterSize(int n) { min_cluster_size_ = n; }
+  int getMinClusterSize() const { return min_cluster_size_; }
+
+  /** \brief Clusters with more points are dropped (default: no limit). */
+  void setMaxClusterSize(int n) { max_cluster_size_ = n; }
+  int getMaxClusterSize() const { return max_cluster_size_; }
+
+  /** \brief Segments the input into clusters (see the class description for errors). */
+  void segment(std::vector<pcl::PointIndices>& clusters);
+
+ protected:
+  /** \brief Root of the set holding i, with path halving. */
+  int findRoot(int i);
+
+  float depth_threshold_factor_ = 0.03f;
+  float min_depth_threshold_ = 0.1f;
+  bool wrap_around_ = true;
+  int max_gap_ = 2;
+  int min_cluster_size_ = 1;
+  int max_cluster_size_ = std::numeric_limits<int>::max();
+
+  // Work buffers kept between calls so a sequence of frames does not reallocate.
+  std::vector<float> range_;
+  std::vector<int> parent_;
+};
+
+}  // namespace pcl_movers
+
+#ifdef PCL_NO_PRECOMPILE
+#include <pcl_movers/impl/range_image_region_growing.hpp>
+#endif

@@ -1,0 +1,231 @@
+/*
+ * SPDX-License-Identifier: BSD-3-Clause
+ */
+#include <pcl_movers/surface_density.h>
+#include <pcl_movers/impl/surface_density.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace pcl_movers {
+
+namespace {
+
+/** Weights of a 1D Gaussian (mean `mean`, σ `sigma`) integrated over the cells [first, last] of an
+ * axis whose cell 0 starts at `origin`, cell size `cell`. The window is ±3σ (at least the cell
+ * holding the mean) and the weights are renormalised over the whole window *before* clipping to
+ * the grid, so a Gaussian inside the grid has mass exactly 1 while mass outside is lost. */
+struct AxisWeights {
+  int first = 0;  // first grid cell with a weight
+  std::vector<float> w;
+};
+
+void axisWeights(float mean, float sigma, float origin, float cell, int n, AxisWeights& out) {
+  out.w.clear();
+  const float u = (mean - origin) / cell;  // position in cells
+  const float reach = 3.f * sigma / cell;
+  const int lo = static_cast<int>(std::floor(u - reach));
+  const int hi = static_cast<int>(std::floor(u + reach));
+  const float inv = 1.f / (std::sqrt(2.f) * sigma);
+  float total = 0.f;
+  float prev = std::erf((lo * cell + origin - mean) * inv);
+  // Weights of the whole window first, to normalise; then keep the part inside [0, n).
+  thread_local std::vector<float> window;
+  window.resize(static_cast<std::size_t>(hi - lo + 1));
+  for (int i = lo; i <= hi; ++i) {
+    const float next = std::erf(((i + 1) * cell + origin - mean) * inv);
+    const float wi = 0.5f * (next - prev);
+    window[static_cast<std::size_t>(i - lo)] = wi;
+    total += wi;
+    prev = next;
+  }
+  const int first = std::max(lo, 0);
+  const int last = std::min(hi, n - 1);
+  out.first = first;
+  if (last < first || total <= 0.f) return;
+  out.w.resize(static_cast<std::size_t>(last - first + 1));
+  for (int i = first; i <= last; ++i)
+    out.w[static_cast<std::size_t>(i - first)] = window[static_cast<std::size_t>(i - lo)] / total;
+}
+
+}  // namespace
+
+void SurfaceDensity::resize(int nx, int ny, int nz) {
+  if (nx < 1 || ny < 1 || nz < 1)
+    throw std::invalid_argument("SurfaceDensity: grid size must be at least 1x1x1, got " +
+                                std::to_string(nx) + "x" + std::to_string(ny) + "x" +
+                                std::to_string(nz));
+  nx_ = nx;
+  ny_ = ny;
+  nz_ = nz;
+  data_.assign(static_cast<std::size_t>(nx) * ny * nz, 0.f);
+  sqrt_.assign(data_.size(), 0.f);
+}
+
+void SurfaceDensity::clear() {
+  std::fill(data_.begin(), data_.end(), 0.f);
+  std::fill(sqrt_.begin(), sqrt_.end(), 0.f);
+}
+
+void SurfaceDensity::updateSqrt() {
+  sqrt_.resize(data_.size());
+  for (std::size_t i = 0; i < data_.size(); ++i) sqrt_[i] = std::sqrt(data_[i]);
+}
+
+void SurfaceDensity::setValues(const std::vector<float>& values) {
+  if (values.size() != data_.size())
+    throw std::invalid_argument("SurfaceDensity::setValues: expected " +
+                                std::to_string(data_.size()) + " values, got " +
+                                std::to_string(values.size()));
+  for (std::size_t i = 0; i < values.size(); ++i)
+    data_[i] = std::isfinite(values[i]) ? std::max(values[i], 0.f) : 0.f;
+  updateSqrt();
+}
+
+float SurfaceDensity::sigmaAtRange(float range) const {
+  return std::max(min_sigma_, sigma_per_metre_ * range);
+}
+
+Eigen::Vector3f SurfaceDensity::cellCentre(int ix, int iy, int iz) const {
+  return centre_ + Eigen::Vector3f((ix - 0.5f * (nx_ - 1)) * resolution_,
+                                   (iy - 0.5f * (ny_ - 1)) * resolution_,
+                                   (iz - 0.5f * (nz_ - 1)) * resolution_z_);
+}
+
+void SurfaceDensity::computeFromPoints(const std::vector<Eigen::Vector3f>& points,
+                                       const std::vector<float>& sigmas,
+                                       const Eigen::Vector3f& centre) {
+  if (points.size() != sigmas.size())
+    throw std::invalid_argument("SurfaceDensity::computeFromPoints: points and sigmas differ");
+  if (!(resolution_ > 0.f) || !(resolution_z_ > 0.f))
+    throw std::invalid_argument("SurfaceDensity: resolutions must be positive");
+  centre_ = centre;
+  std::fill(data_.begin(), data_.end(), 0.f);
+
+  std::size_t valid = 0;
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (points[i].allFinite() && sigmas[i] > 0.f && std::isfinite(sigmas[i])) ++valid;
+  if (valid == 0) {
+    updateSqrt();
+    return;
+  }
+  const float mass = 1.f / static_cast<float>(valid);
+  // Lower corner of cell 0 on each axis.
+  const float ox = centre.x() - 0.5f * nx_ * resolution_;
+  const float oy = centre.y() - 0.5f * ny_ * resolution_;
+  const float oz = centre.z() - 0.5f * nz_ * resolution_z_;
+  AxisWeights wx, wy, wz;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3f& p = points[i];
+    const float s = sigmas[i];
+    if (!p.allFinite() || !(s > 0.f) || !std::isfinite(s)) continue;
+    // Separable Gaussian: the 3D cell integral is the product of three 1D cell integrals.
+    axisWeights(p.z(), s, oz, resolution_z_, nz_, wz);
+    if (wz.w.empty()) continue;
+    axisWeights(p.y(), s, oy, resolution_, ny_, wy);
+    if (wy.w.empty()) continue;
+    axisWeights(p.x(), s, ox, resolution_, nx_, wx);
+    if (wx.w.empty()) continue;
+    for (std::size_t kz = 0; kz < wz.w.size(); ++kz) {
+      const float fz = mass * wz.w[kz];
+      for (std::size_t ky = 0; ky < wy.w.size(); ++ky) {
+        const float fzy = fz * wy.w[ky];
+        float* row = &data_[index(wx.first, wy.first + static_cast<int>(ky),
+                                  wz.first + static_cast<int>(kz))];
+        for (std::size_t kx = 0; kx < wx.w.size(); ++kx) row[kx] += fzy * wx.w[kx];
+      }
+    }
+  }
+  updateSqrt();
+}
+
+float SurfaceDensity::halfLifeWeight(float half_life_frames) {
+  if (!(half_life_frames > 0.f)) return 1.f;
+  return 1.f - std::pow(0.5f, 1.f / half_life_frames);
+}
+
+void SurfaceDensity::accumulate(const SurfaceDensity& view, float weight_of_new) {
+  if (view.nx_ != nx_ || view.ny_ != ny_ || view.nz_ != nz_ || view.resolution_ != resolution_ ||
+      view.resolution_z_ != resolution_z_)
+    throw std::invalid_argument("SurfaceDensity::accumulate: grids differ in size or resolution");
+  const float w = std::min(std::max(weight_of_new, 0.f), 1.f);
+  const bool same_place = (view.centre_ - centre_).norm() < 1e-6f;
+  const SurfaceDensity* v = &view;
+  SurfaceDensity moved;
+  if (!same_place) {
+    // Content of `view` expressed on this grid: moving it by (view centre - our centre).
+    SurfaceDensity tmp = view;
+    tmp.centre_ = centre_;
+    moved = tmp.shifted(view.centre_ - centre_);
+    v = &moved;
+  }
+  if (empty()) {
+    data_ = v->data_;
+  } else {
+    for (std::size_t i = 0; i < data_.size(); ++i)
+      data_[i] = (1.f - w) * data_[i] + w * v->data_[i];
+  }
+  updateSqrt();
+}
+
+SurfaceDensity SurfaceDensity::shifted(const Eigen::Vector3f& offset) const {
+  SurfaceDensity out = *this;
+  std::fill(out.data_.begin(), out.data_.end(), 0.f);
+  // Offset in cells, split into whole and fractional parts; each source cell spreads its mass to
+  // the (up to) 8 cells around its moved position, so mass is conserved inside the grid.
+  const float sx = offset.x() / resolution_, sy = offset.y() / resolution_,
+              sz = offset.z() / resolution_z_;
+  const int bx = static_cast<int>(std::floor(sx)), by = static_cast<int>(std::floor(sy)),
+            bz = static_cast<int>(std::floor(sz));
+  const float fx = sx - bx, fy = sy - by, fz = sz - bz;
+  const float wxs[2] = {1.f - fx, fx}, wys[2] = {1.f - fy, fy}, wzs[2] = {1.f - fz, fz};
+  for (int iz = 0; iz < nz_; ++iz)
+    for (int iy = 0; iy < ny_; ++iy)
+      for (int ix = 0; ix < nx_; ++ix) {
+        const float v = data_[index(ix, iy, iz)];
+        if (v == 0.f) continue;
+        for (int a = 0; a < 2; ++a) {
+          const int tz = iz + bz + a;
+          if (tz < 0 || tz >= nz_ || wzs[a] == 0.f) continue;
+          for (int b = 0; b < 2; ++b) {
+            const int ty = iy + by + b;
+            if (ty < 0 || ty >= ny_ || wys[b] == 0.f) continue;
+            for (int c = 0; c < 2; ++c) {
+              const int tx = ix + bx + c;
+              if (tx < 0 || tx >= nx_ || wxs[c] == 0.f) continue;
+              out.data_[index(tx, ty, tz)] += v * wzs[a] * wys[b] * wxs[c];
+            }
+          }
+        }
+      }
+  out.updateSqrt();
+  return out;
+}
+
+float SurfaceDensity::totalMass() const {
+  double s = 0.0;
+  for (float v : data_) s += v;
+  return static_cast<float>(s);
+}
+
+float SurfaceDensity::bhattacharyya(const SurfaceDensity& a, const SurfaceDensity& b) {
+  if (a.nx_ != b.nx_ || a.ny_ != b.ny_ || a.nz_ != b.nz_ || a.resolution_ != b.resolution_ ||
+      a.resolution_z_ != b.resolution_z_ || (a.centre_ - b.centre_).norm() > 1e-5f)
+    throw std::invalid_argument("SurfaceDensity::bhattacharyya: grids differ");
+  double s = 0.0;
+  for (std::size_t i = 0; i < a.sqrt_.size(); ++i) s += a.sqrt_[i] * b.sqrt_[i];
+  return static_cast<float>(std::min(std::max(s, 0.0), 1.0));
+}
+
+#ifndef PCL_NO_PRECOMPILE
+template void SurfaceDensity::compute<pcl::PointXYZ>(const pcl::PointCloud<pcl::PointXYZ>&,
+                                                     const Eigen::Vector3f&,
+                                                     const Eigen::Vector3f&);
+template void SurfaceDensity::compute<pcl::PointXYZI>(const pcl::PointCloud<pcl::PointXYZI>&,
+                                                      const Eigen::Vector3f&,
+                                                      const Eigen::Vector3f&);
+#endif
+
+}  // namespace pcl_movers

@@ -1,0 +1,340 @@
+/*
+ * SPDX-License-Identifier: BSD-3-Clause
+ */
+#include <pcl_movers/bhattacharya_registration.h>
+#include <pcl_movers/eval/registration_pairs.h>
+
+#include <pcl/common/transforms.h>
+
+#include <gtest/gtest.h>
+
+#include <pcl/common/centroid.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <random>
+
+using pcl_movers::BhattacharyaRegistration;
+using pcl_movers::eval::RegistrationPair;
+
+namespace {
+
+constexpr float kDeg = 3.14159265f / 180.f;
+
+/** A ray-cast vehicle (body + cabin) at (x, y) with yaw, seen from `sensor`. */
+pcl::PointCloud<pcl::PointXYZ>::Ptr vehicle(float x, float y, float yaw,
+                                            const Eigen::Vector3f& sensor, float phase,
+                                            unsigned seed) {
+  using pcl_movers::eval::SimShape;
+  std::vector<SimShape> shapes(2);
+  shapes[0].length = 4.4f;
+  shapes[0].width = 1.8f;
+  shapes[0].height = 1.0f;
+  shapes[0].yaw = yaw;
+  shapes[0].centre = Eigen::Vector3f(x, y, 0.8f);
+  shapes[1] = shapes[0];
+  shapes[1].length = 2.4f;
+  shapes[1].height = 0.6f;
+  shapes[1].centre = Eigen::Vector3f(x - 0.4f * std::cos(yaw), y - 0.4f * std::sin(yaw), 1.6f);
+  std::mt19937 rng(seed);
+  return pcl::make_shared<pcl::PointCloud<pcl::PointXYZ>>(
+      pcl_movers::eval::rayCastObject(shapes, 0, sensor, phase, 0.01f, rng));
+}
+
+Eigen::Matrix4f yawAbout(const Eigen::Vector3f& c, float yaw, const Eigen::Vector3f& t) {
+  Eigen::Affine3f a = Eigen::Translation3f(t + c) *
+                      Eigen::AngleAxisf(yaw, Eigen::Vector3f::UnitZ()) * Eigen::Translation3f(-c);
+  return a.matrix();
+}
+
+}  // namespace
+
+TEST(BhattacharyaRegistration, IdenticalCloudsGiveBOneAndIdentity) {
+  const Eigen::Vector3f sensor(0.f, 0.f, 1.73f);
+  auto cloud = vehicle(15.f, 3.f, 0.3f, sensor, 0.f, 1);
+  ASSERT_GT(cloud->size(), 200u);
+  BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ> reg;
+  reg.setInputSource(cloud);
+  reg.setInputTarget(cloud);
+  pcl::PointCloud<pcl::PointXYZ> out;
+  reg.align(out);
+  EXPECT_TRUE(reg.hasConverged());
+  EXPECT_NEAR(reg.getSimilarity(), 1.f, 0.01f);
+  EXPECT_LT((reg.getFinalTransformation().block<3, 1>(0, 3).norm()), 0.02f);
+  EXPECT_EQ(out.size(), cloud->size());
+  // The surface peaks at zero translation and decreases away from it.
+  const auto& s = reg.getSimilaritySurface();
+  ASSERT_FALSE(s.empty());
+  const int c = s.nx / 2;
+  EXPECT_NEAR(s.at(c, c), 1.f, 0.01f);
+  EXPECT_GT(s.at(c, c), s.at(c + 1, c));
+  EXPECT_GT(s.at(c + 1, c), s.at(c + 3, c));
+  EXPECT_GT(s.at(c, c + 2), s.at(c, c + 6));
+  EXPECT_LT(s.at(0, 0), 0.3f);
+}
+
+TEST(BhattacharyaRegistration, RecoversTranslationsToSubCellAccuracy) {
+  const Eigen::Vector3f sensor(0.f, 0.f, 1.73f);
+  auto target = vehicle(20.f, -4.f, 0.5f, sensor, 0.f, 1);
+  // Known motions that are not multiples of the 0.2 m cell; the source is a fresh ray-cast
+  // (different sampling) of the moved vehicle, the sensor also moved.
+  const std::vector<Eigen::Vector2f> motions = {
+      {0.33f, 0.11f}, {-1.27f, 0.58f}, {0.9f, -1.43f}, {0.05f, 0.07f}};
+  float worst = 0.f;
+  for (std::size_t i = 0; i < motions.size(); ++i) {
+    const Eigen::Vector2f m = motions[i];
+    auto source = vehicle(20.f + m.x(), -4.f + m.y(), 0.5f, sensor + Eigen::Vector3f(0.7f, 0, 0),
+                          0.37f * (i + 1), 2 + i);
+    BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ> reg;
+    reg.setInputSource(source);
+    reg.setInputTarget(target);
+    pcl::PointCloud<pcl::PointXYZ> out;
+    reg.align(out);
+    ASSERT_TRUE(reg.hasConverged()) << "motion " << i;
+    const Eigen::Vector3f t = reg.getFinalTransformation().block<3, 1>(0, 3);
+    const float err = (t.head<2>() + m).norm();  // source → target is −m
+    worst = std::max(worst, err);
+    EXPECT_LT(err, 0.07f) << "motion " << i << " estimated " << t.transpose();
+    EXPECT_GT(reg.getSimilarity(), 0.7f);
+  }
+  EXPECT_LT(worst, 0.07f);
+}
+
+TEST(BhattacharyaRegistration, GuessCentresTheWindow) {
+  const Eigen::Vector3f sensor(0.f, 0.f, 1.73f);
+  auto target = vehicle(25.f, 2.f, 0.f, sensor, 0.f, 1);
+  auto source = vehicle(28.5f, 2.6f, 0.f, sensor, 0.5f, 2);  // 3.55 m away
+  BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ> reg;
+  reg.setInputSource(source);
+  reg.setInputTarget(target);
+  reg.setSearchRadius(1.0f);
+  pcl::PointCloud<pcl::PointXYZ> out;
+  reg.align(out);  // identity guess: motion outside the ±1 m window
+  EXPECT_FALSE(reg.hasConverged());
+  Eigen::Matrix4f guess = Eigen::Matrix4f::Identity();
+  guess(0, 3) = -3.2f;
+  guess(1, 3) = -0.8f;
+  reg.align(out, guess);
+  ASSERT_TRUE(reg.hasConverged());
+  const Eigen::Matrix4f t = reg.getFinalTransformation();
+  EXPECT_NEAR(t(0, 3), -3.5f, 0.08f);
+  EXPECT_NEAR(t(1, 3), -0.6f, 0.08f);
+  // Output is the source moved by the final transformation.
+  pcl::PointCloud<pcl::PointXYZ> expected;
+  pcl::transformPointCloud(*source, expected, t);
+  ASSERT_EQ(out.size(), expected.size());
+  EXPECT_NEAR(out[0].x, expected[0].x, 1e-4f);
+}
+
+TEST(BhattacharyaRegistration, RecoversYawWithLayers) {
+  const Eigen::Vector3f sensor(0.f, 0.f, 1.73f);
+  auto target = vehicle(15.f, 5.f, 0.2f, sensor, 0.f, 1);
+  // Source: the same vehicle turned by +9° about its centre and moved.
+  const float dyaw = 9.f * kDeg;
+  auto source = vehicle(15.6f, 5.3f, 0.2f + dyaw, sensor, 0.3f, 2);
+  BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ> reg;
+  reg.setInputSource(source);
+  reg.setInputTarget(target);
+  reg.setYawSamples(5);
+  reg.setYawStep(5.f * kDeg);
+  pcl::PointCloud<pcl::PointXYZ> out;
+  reg.align(out);
+  ASSERT_TRUE(reg.hasConverged());
+  const Eigen::Matrix4f t = reg.getFinalTransformation();
+  const float yaw = std::atan2(t(1, 0), t(0, 0));
+  EXPECT_NEAR(yaw, -dyaw, 2.f * kDeg);
+  // Where does the source centre go? Onto the target centre.
+  const Eigen::Vector4f c(15.6f, 5.3f, 1.f, 1.f);
+  const Eigen::Vector4f mapped = t * c;
+  EXPECT_NEAR(mapped.x(), 15.f, 0.1f);
+  EXPECT_NEAR(mapped.y(), 5.f, 0.1f);
+  EXPECT_EQ(reg.getSimilaritySurface().yaws.size(), 5u);
+
+  // Without yaw layers the match is worse (lower B).
+  BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ> flat;
+  flat.setInputSource(source);
+  flat.setInputTarget(target);
+  flat.align(out);
+  EXPECT_LT(flat.getSimilarity(), reg.getSimilarity());
+}
+
+TEST(BhattacharyaRegistration, SimilarityDropsWithDistanceAndForOtherObjects) {
+  const Eigen::Vector3f sensor(0.f, 0.f, 1.73f);
+  auto target = vehicle(15.f, 0.f, 0.f, sensor, 0.f, 1);
+  BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ> reg;
+  reg.setInputTarget(target);
+  reg.setInputSource(target);
+  float previous = 2.f;
+  pcl::PointCloud<pcl::PointXYZ> out;
+  // Fix the transformation by a tiny window around guesses increasingly far from the truth:
+  // B at the (forced) guess decreases monotonically.
+  for (float d : {0.f, 0.3f, 0.6f, 1.2f}) {
+    reg.setSearchRadius(0.2f);
+    Eigen::Matrix4f guess = Eigen::Matrix4f::Identity();
+    guess(1, 3) = d;
+    reg.align(out, guess);
+    const auto& s = reg.getSimilaritySurface();
+    const float b_at_guess = s.at(s.nx / 2, s.ny / 2);
+    EXPECT_LT(b_at_guess, previous + 1e-6f) << d;
+    previous = b_at_guess;
+  }
+  EXPECT_LT(previous, 0.5f);
+
+  // A pedestrian-sized cylinder against the vehicle: low B.
+  using pcl_movers::eval::SimShape;
+  std::vector<SimShape> person(1);
+  person[0].kind = SimShape::Cylinder;
+  person[0].width = 0.5f;
+  person[0].height = 1.75f;
+  person[0].centre = Eigen::Vector3f(15.f, 0.f, 0.875f);
+  std::mt19937 rng(3);
+  auto p = pcl::make_shared<pcl::PointCloud<pcl::PointXYZ>>(
+      pcl_movers::eval::rayCastObject(person, 0, sensor, 0.f, 0.01f, rng));
+  reg.setSearchRadius(2.f);
+  reg.setInputSource(p);
+  reg.align(out);
+  EXPECT_LT(reg.getSimilarity(), 0.6f);
+}
+
+TEST(BhattacharyaRegistration, DegenerateCloudsDoNotConverge) {
+  BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ> reg;
+  const Eigen::Vector3f sensor(0.f, 0.f, 1.73f);
+  auto good = vehicle(15.f, 0.f, 0.f, sensor, 0.f, 1);
+  auto empty = pcl::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
+  auto nans = pcl::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (int i = 0; i < 10; ++i) nans->push_back(pcl::PointXYZ(nan, nan, nan));
+  auto one = pcl::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
+  one->push_back(pcl::PointXYZ(15.f, 0.f, 1.f));
+  pcl::PointCloud<pcl::PointXYZ> out;
+
+  // A good run first, so a stale "converged" from it would show.
+  reg.setInputSource(good);
+  reg.setInputTarget(good);
+  reg.align(out);
+  ASSERT_TRUE(reg.hasConverged());
+
+  for (const auto& bad : {empty, nans, one}) {
+    reg.setInputSource(bad);
+    reg.setInputTarget(good);
+    reg.align(out);
+    EXPECT_FALSE(reg.hasConverged()) << bad->size() << " source points";
+    EXPECT_EQ(reg.getSimilarity(), 0.f);
+    reg.setInputSource(good);
+    reg.setInputTarget(bad);
+    reg.align(out);
+    EXPECT_FALSE(reg.hasConverged()) << bad->size() << " target points";
+  }
+  // Mixed valid and NaN points are fine.
+  auto mixed = pcl::make_shared<pcl::PointCloud<pcl::PointXYZ>>(*good);
+  mixed->push_back(pcl::PointXYZ(nan, 0.f, 0.f));
+  mixed->is_dense = false;
+  reg.setInputSource(mixed);
+  reg.setInputTarget(good);
+  reg.align(out);
+  EXPECT_TRUE(reg.hasConverged());
+  EXPECT_GT(reg.getSimilarity(), 0.95f);
+}
+
+TEST(BhattacharyaRegistration, TargetDensityAndSourceDensityForAccumulation) {
+  const Eigen::Vector3f sensor(0.f, 0.f, 1.73f);
+  auto first = vehicle(18.f, 2.f, 0.1f, sensor, 0.f, 1);
+  auto second = vehicle(18.8f, 2.1f, 0.1f, sensor, 0.5f, 2);
+  auto model = pcl::make_shared<pcl_movers::SurfaceDensity>();
+  Eigen::Vector4f c;
+  pcl::compute3DCentroid(*first, c);
+  model->compute(*first, sensor, c.head<3>());
+
+  BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ> reg;
+  reg.setTargetDensity(model);  // no target cloud at all
+  reg.setInputSource(second);
+  pcl::PointCloud<pcl::PointXYZ> out;
+  reg.align(out);
+  ASSERT_TRUE(reg.hasConverged());
+  EXPECT_NEAR(reg.getFinalTransformation()(0, 3), -0.8f, 0.08f);
+  EXPECT_NEAR(reg.getFinalTransformation()(1, 3), -0.1f, 0.08f);
+  auto view = reg.getSourceDensity();
+  ASSERT_TRUE(view);
+  // The registered view lies on the model's grid and matches it about as well as B says.
+  EXPECT_EQ(view->getNx(), model->getNx());
+  EXPECT_TRUE(view->getCentre().isApprox(model->getCentre()));
+  EXPECT_NEAR(pcl_movers::SurfaceDensity::bhattacharyya(*model, *view), reg.getSimilarity(), 0.03f);
+  model->accumulate(*view, pcl_movers::SurfaceDensity::halfLifeWeight(3.f));
+  EXPECT_GT(pcl_movers::SurfaceDensity::bhattacharyya(*model, *view), reg.getSimilarity());
+}
+
+TEST(BhattacharyaRegistration, MixedPointTypesAndOptions) {
+  const Eigen::Vector3f sensor(0.f, 0.f, 1.73f);
+  auto t_xyz = vehicle(20.f, 0.f, 0.f, sensor, 0.f, 1);
+  auto s_xyz = vehicle(20.5f, 0.3f, 0.f, sensor, 0.4f, 2);
+  auto to_i = [](const pcl::PointCloud<pcl::PointXYZ>& in) {
+    auto out = pcl::make_shared<pcl::PointCloud<pcl::PointXYZI>>();
+    for (const auto& p : in) {
+      pcl::PointXYZI q;
+      q.x = p.x;
+      q.y = p.y;
+      q.z = p.z;
+      q.intensity = 0.5f;
+      out->push_back(q);
+    }
+    return out;
+  };
+  auto t_i = to_i(*t_xyz);
+  auto s_i = to_i(*s_xyz);
+  auto check = [](auto& reg, auto source, auto target) {
+    reg.setInputSource(source);
+    reg.setInputTarget(target);
+    typename std::remove_reference_t<decltype(reg)>::PointCloudSource out;
+    reg.align(out);
+    EXPECT_TRUE(reg.hasConverged());
+    EXPECT_NEAR(reg.getFinalTransformation()(0, 3), -0.5f, 0.08f);
+    EXPECT_NEAR(reg.getFinalTransformation()(1, 3), -0.3f, 0.08f);
+  };
+  BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ> a;
+  BhattacharyaRegistration<pcl::PointXYZI, pcl::PointXYZI> b;
+  BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZI> c;
+  BhattacharyaRegistration<pcl::PointXYZI, pcl::PointXYZ> d;
+  check(a, s_xyz, t_xyz);
+  check(b, s_i, t_i);
+  check(c, s_xyz, t_i);
+  check(d, s_i, t_xyz);
+  // Reduced vertical resolution and z search still register.
+  a.setVerticalSlices(3);
+  check(a, s_xyz, t_xyz);
+  a.setVerticalSlices(7);
+  a.setSearchZ(true);
+  check(a, s_xyz, t_xyz);
+  EXPECT_NEAR(a.getFinalTransformation()(2, 3), 0.f, 0.1f);
+  // Works through the pcl::Registration interface.
+  pcl::Registration<pcl::PointXYZ, pcl::PointXYZ>::Ptr base =
+      pcl::make_shared<BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ>>();
+  base->setInputSource(s_xyz);
+  base->setInputTarget(t_xyz);
+  pcl::PointCloud<pcl::PointXYZ> out;
+  base->align(out);
+  EXPECT_TRUE(base->hasConverged());
+  EXPECT_EQ(base->getClassName(), "BhattacharyaRegistration");
+}
+
+TEST(BhattacharyaRegistration, RealKittiPairs) {
+  const std::string folder = std::string(PCL_MOVERS_SHARED_DATA) + "/kitti-tracking-0000-a";
+  std::ifstream probe(folder + "/poses.txt");
+  if (!probe) GTEST_SKIP() << "shared KITTI data not found at " << folder;
+  // A handful of consecutive-frame pairs of the moving van and the cyclist.
+  std::vector<RegistrationPair> pairs = pcl_movers::eval::loadKittiPairs(folder, {0, 1}, {1}, 15);
+  ASSERT_GE(pairs.size(), 6u);
+  int ok = 0;
+  for (const auto& pair : pairs) {
+    BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ> reg;
+    reg.setInputSource(pair.source);
+    reg.setInputTarget(pair.target);
+    pcl::PointCloud<pcl::PointXYZ> out;
+    reg.align(out, pcl_movers::eval::perturbedGuess(pair, 1.0f, 0.7f));
+    if (reg.hasConverged() &&
+        pcl_movers::eval::translationError(reg.getFinalTransformation(), pair) < 0.3f)
+      ++ok;
+  }
+  EXPECT_GE(ok, static_cast<int>(pairs.size()) - 1);
+}

@@ -1,0 +1,327 @@
+/*
+ * Detection metrics (DESIGN.md "Metrics") on hand-made ground truth and tracks with known answers,
+ * plus the pcl_movers_eval tool's handling of bad input.
+ * SPDX-License-Identifier: BSD-3-Clause
+ */
+#include <pcl_movers/common.h>
+#include <pcl_movers/eval/detection_metrics.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+namespace fs = std::filesystem;
+using pcl_movers::eval::DetectionMetricsParams;
+using pcl_movers::eval::scoreDetections;
+using pcl_movers::io::GroundTruthObject;
+using pcl_movers::io::TrackRow;
+
+namespace {
+
+GroundTruthObject object(int frame, int id, double x, double y, bool moving, int points = 100,
+                         double yaw = 0.0, const std::string& type = "Car") {
+  GroundTruthObject o;
+  o.frame = frame;
+  o.track_id = id;
+  o.type = type;
+  o.center = Eigen::Vector3d(x, y, 0.0);
+  o.length = 4.0;
+  o.width = 2.0;
+  o.height = 1.6;
+  o.yaw = yaw;
+  o.moving = moving;
+  o.speed = moving ? 5.0 : 0.0;
+  o.n_points = points;
+  return o;
+}
+
+TrackRow row(int frame, int id, double x, double y, bool mover = true, double vx = 0,
+             double vy = 0) {
+  TrackRow r;
+  r.frame = frame;
+  r.time = 0.1 * frame;
+  r.track_id = id;
+  r.mover = mover;
+  r.x = x;
+  r.y = y;
+  r.z = 0.1;
+  r.vx = vx;
+  r.vy = vy;
+  r.speed = std::hypot(vx, vy);
+  return r;
+}
+
+}  // namespace
+
+TEST(DetectionMetrics, HitsDelayAndHitRate) {
+  std::vector<GroundTruthObject> objects;
+  std::vector<TrackRow> tracks;
+  for (int f = 0; f < 10; ++f) {
+    objects.push_back(object(f, 7, 10.0, 0.0, true, 100, 0.0, "Van"));
+    if (f >= 3) tracks.push_back(row(f, 1, 10.3, 0.2));
+    // A non-mover row on the target is neither a hit nor a false alarm.
+    tracks.push_back(row(f, 2, 10.0, 0.0, false));
+  }
+  const auto s = scoreDetections(objects, tracks);
+  ASSERT_EQ(s.targets.size(), 1u);
+  const auto& t = s.targets[0];
+  EXPECT_EQ(t.track_id, 7);
+  EXPECT_EQ(t.type, "Van");
+  EXPECT_EQ(t.visible_frames, 10);
+  EXPECT_EQ(t.hits, 7);
+  EXPECT_NEAR(t.hitRate(), 0.7, 1e-12);
+  EXPECT_EQ(t.first_visible, 0);
+  EXPECT_EQ(t.first_hit, 3);
+  EXPECT_EQ(t.delay, 3);
+  EXPECT_NEAR(s.mean_hit_rate, 0.7, 1e-12);
+  EXPECT_NEAR(s.median_delay, 3.0, 1e-12);
+  EXPECT_EQ(s.false_alarms, 0);
+  EXPECT_EQ(s.frames, 10);
+}
+
+TEST(DetectionMetrics, GrownBoxFollowsYaw) {
+  // Box 4 x 2 m; grown by 1 m -> half extents 2.5 (length) and 1.5 (width).
+  std::vector<GroundTruthObject> objects = {object(0, 1, 10, 0, true),
+                                            object(1, 1, 10, 0, true, 100, M_PI / 2)};
+  // Frame 0, yaw 0: 2.4 m ahead of the centre is inside the grown box, 2.6 m is not.
+  // Frame 1, yaw 90 deg: the length now runs along y, so 2.4 m along x is outside.
+  std::vector<TrackRow> inside = {row(0, 1, 12.4, 0), row(1, 1, 10, 2.4)};
+  std::vector<TrackRow> outside = {row(0, 1, 12.6, 0), row(1, 1, 12.4, 0)};
+  const auto a = scoreDetections(objects, inside);
+  EXPECT_EQ(a.targets[0].hits, 2);
+  EXPECT_EQ(a.false_alarms, 0);
+  const auto b = scoreDetections(objects, outside);
+  EXPECT_EQ(b.targets[0].hits, 0);
+  EXPECT_EQ(b.false_alarms, 2);
+  EXPECT_EQ(b.targets_never_detected, 1);
+  EXPECT_EQ(b.targets[0].delay, -1);
+  // Without growth the 2.4 m row misses.
+  DetectionMetricsParams tight;
+  tight.grow_xy = 0.0;
+  EXPECT_EQ(scoreDetections(objects, inside, tight).targets[0].hits, 0);
+}
+
+TEST(DetectionMetrics, SectorAndMinPoints) {
+  // Target 1 at 90 deg (outside the KITTI 40 deg sector), target 2 ahead with too few points,
+  // target 3 ahead and visible.
+  std::vector<GroundTruthObject> objects;
+  std::vector<TrackRow> tracks;
+  for (int f = 0; f < 4; ++f) {
+    objects.push_back(object(f, 1, 0.0, 10.0, true));
+    objects.push_back(object(f, 2, 20.0, -5.0, true, 9));
+    objects.push_back(object(f, 3, 15.0, 3.0, true));
+    tracks.push_back(row(f, 11, 0.0, 10.0));
+    tracks.push_back(row(f, 12, 20.0, -5.0));
+    tracks.push_back(row(f, 13, 15.0, 3.0));
+    tracks.push_back(row(f, 14, -10.0, 0.0));  // behind: outside the sector, ignored at 40 deg
+  }
+  const auto s = scoreDetections(objects, tracks);
+  ASSERT_EQ(s.targets.size(), 3u);
+  EXPECT_EQ(s.targets[0].visible_frames, 0);
+  EXPECT_EQ(s.targets[1].visible_frames, 0);
+  EXPECT_EQ(s.targets[2].visible_frames, 4);
+  EXPECT_EQ(s.targets[2].hits, 4);
+  EXPECT_NEAR(s.mean_hit_rate, 1.0, 1e-12);  // invisible targets do not dilute the mean
+  // The row on the too-sparse target matches a target box: not a false alarm. The rows at 90 deg
+  // and behind are outside the sector and unscored.
+  EXPECT_EQ(s.false_alarms, 0);
+  EXPECT_EQ(s.mover_rows_in_sector, 8);
+
+  DetectionMetricsParams all_round;
+  all_round.sector_deg = 180;
+  all_round.min_points = 5;
+  const auto r = scoreDetections(objects, tracks, all_round);
+  EXPECT_EQ(r.targets[0].visible_frames, 4);
+  EXPECT_EQ(r.targets[1].visible_frames, 4);
+  EXPECT_EQ(r.false_alarms, 4);  // the row behind now counts
+  EXPECT_NEAR(r.false_alarms_per_frame, 1.0, 1e-12);
+}
+
+TEST(DetectionMetrics, FalseAlarmsIncludeStaticObjectsAndUseFrameCount) {
+  std::vector<GroundTruthObject> objects = {object(0, 1, 10, 0, true), object(0, 2, 10, 8, false),
+                                            object(5, 1, 12, 0, true)};
+  std::vector<TrackRow> tracks = {row(0, 1, 10, 0), row(0, 2, 10, 8), row(0, 3, 20, -3),
+                                  row(5, 1, 12, 0), row(5, 4, 30, 0, false)};
+  auto s = scoreDetections(objects, tracks);
+  EXPECT_EQ(s.false_alarms, 2);  // the parked car declared moving + the row on nothing
+  EXPECT_EQ(s.false_alarms_on_static_objects, 1);
+  EXPECT_EQ(s.frames, 2);  // distinct frames 0 and 5
+  EXPECT_NEAR(s.false_alarms_per_frame, 1.0, 1e-12);
+  DetectionMetricsParams p;
+  p.frames = 40;
+  s = scoreDetections(objects, tracks, p);
+  EXPECT_NEAR(s.false_alarms_per_frame, 0.05, 1e-12);
+}
+
+TEST(DetectionMetrics, MedianDelayOverDetectedTargets) {
+  std::vector<GroundTruthObject> objects;
+  std::vector<TrackRow> tracks;
+  const int first_hit[3] = {1, 4, 6};
+  for (int f = 0; f < 10; ++f)
+    for (int id = 0; id < 4; ++id) {
+      objects.push_back(object(f, id, 10.0 + 10 * id, 0.0, true));
+      if (id < 3 && f >= first_hit[id]) tracks.push_back(row(f, id, 10.0 + 10 * id, 0.0));
+    }
+  const auto s = scoreDetections(objects, tracks);
+  EXPECT_NEAR(s.median_delay, 4.0, 1e-12);
+  EXPECT_EQ(s.targets_never_detected, 1);
+  EXPECT_NEAR(s.mean_hit_rate, (0.9 + 0.6 + 0.4 + 0.0) / 4, 1e-12);
+  EXPECT_NEAR(s.pooled_hit_rate, 19.0 / 40.0, 1e-12);
+}
+
+TEST(DetectionMetrics, VelocityErrorWithPosesAndSpeeds) {
+  // The sensor drives along x at 4 m/s, the target at 5 m/s: in the sensor frame it creeps
+  // ahead at 1 m/s, so only a pose-aware reference gives 5 m/s.
+  std::vector<GroundTruthObject> objects;
+  std::vector<TrackRow> tracks;
+  std::vector<Eigen::Isometry3d> poses;
+  std::vector<double> times;
+  for (int f = 0; f < 12; ++f) {
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.translation() = Eigen::Vector3d(0.4 * f, 0.0, 0.0);
+    poses.push_back(pose);
+    times.push_back(0.1 * f);
+    objects.push_back(object(f, 3, 10.0 + 0.1 * f, 0.0, true));
+    tracks.push_back(row(f, 9, 10.0 + 0.1 * f, 0.1, true, 5.3, 0.4));
+  }
+  const auto with_poses = scoreDetections(objects, tracks, DetectionMetricsParams(), poses, times);
+  ASSERT_EQ(with_poses.targets.size(), 1u);
+  EXPECT_EQ(with_poses.targets[0].velocity_samples, 12);
+  EXPECT_NEAR(with_poses.targets[0].rms_velocity_error, 0.5, 1e-9);
+  EXPECT_NEAR(with_poses.rms_velocity_error, 0.5, 1e-9);
+
+  // Without poses: speed comparison, | |(5.3, 0.4)| - 5 |.
+  const auto no_poses = scoreDetections(objects, tracks);
+  EXPECT_NEAR(no_poses.rms_velocity_error, std::hypot(5.3, 0.4) - 5.0, 1e-9);
+
+  // Rotated world: a pose yaw of 90 deg turns the target's +x motion into world +y.
+  for (auto& p : poses) p.linear() = Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()).matrix();
+  for (auto& p : poses) p.translation() = Eigen::Vector3d(0.0, p.translation().x(), 0.0);
+  for (auto& r : tracks) {
+    r.vx = 0.0;
+    r.vy = 5.0;
+  }
+  const auto rotated = scoreDetections(objects, tracks, DetectionMetricsParams(), poses, times);
+  EXPECT_NEAR(rotated.rms_velocity_error, 0.0, 1e-9);
+}
+
+TEST(DetectionMetrics, BadInputsThrow) {
+  std::vector<GroundTruthObject> objects = {object(3, 1, 10, 0, true)};
+  std::vector<TrackRow> tracks = {row(3, 1, 10, 0)};
+  DetectionMetricsParams p;
+  p.sector_deg = 0;
+  EXPECT_THROW(scoreDetections(objects, tracks, p), pcl_movers::InputError);
+  p.sector_deg = 40;
+  p.grow_xy = -1;
+  EXPECT_THROW(scoreDetections(objects, tracks, p), pcl_movers::InputError);
+  // Poses that do not reach frame 3 are an input error, not a crash.
+  std::vector<Eigen::Isometry3d> poses(2, Eigen::Isometry3d::Identity());
+  EXPECT_THROW(scoreDetections(objects, tracks, DetectionMetricsParams(), poses),
+               pcl_movers::InputError);
+}
+
+TEST(DetectionMetrics, ReportsAndChart) {
+  std::vector<GroundTruthObject> objects;
+  std::vector<TrackRow> tracks;
+  for (int f = 0; f < 4; ++f) {
+    objects.push_back(object(f, 0, 10, 0, true, 100, 0, "Van"));
+    objects.push_back(object(f, 1, 20, 0, true, 100, 0, "Cyclist"));
+    if (f >= 2) tracks.push_back(row(f, 5, 10, 0));
+  }
+  const auto s = scoreDetections(objects, tracks);
+  const std::string md = pcl_movers::eval::formatMarkdown(s);
+  EXPECT_NE(md.find("| 0 | Van | 4 | 2 | 50.0 | 2 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| 1 | Cyclist | 4 | 0 | 0.0 | never |"), std::string::npos) << md;
+  EXPECT_NE(md.find("mean hit % | 25.0"), std::string::npos) << md;
+  const std::string js = pcl_movers::eval::formatJson(s);
+  EXPECT_NE(js.find("\"mean_hit_rate\": 0.2500"), std::string::npos) << js;
+  EXPECT_NE(js.find("\"delay\": null"), std::string::npos) << js;
+
+  int w = 0, h = 0;
+  std::vector<unsigned char> rgb;
+  pcl_movers::eval::drawHitChart(s, "TEST", w, h, rgb);
+  ASSERT_GT(w, 0);
+  ASSERT_GT(h, 0);
+  ASSERT_EQ(rgb.size(), std::size_t(w) * h * 3);
+  // Bar pixels (the chart's blue) scale with the hit rate: one bar of 50 %, one of 0 %.
+  std::size_t blue = 0;
+  for (std::size_t i = 0; i < rgb.size(); i += 3)
+    if (rgb[i] == 52 && rgb[i + 1] == 101 && rgb[i + 2] == 164) ++blue;
+  EXPECT_NEAR(double(blue), 48.0 * 150.0, 48.0 * 3);
+}
+
+// ------------------------------------------------------------------ the tool on bad input
+namespace {
+
+std::string toolPath() {
+  return std::string(PCL_MOVERS_BINARY_DIR) + "/apps/pcl_movers_eval";
+}
+
+int runTool(const std::string& args, std::string* output = nullptr) {
+  const std::string out_file = fs::temp_directory_path() / "pcl_movers_eval_test_out.txt";
+  const int rc = std::system((toolPath() + " " + args + " >" + out_file + " 2>&1").c_str());
+  if (output) {
+    std::ifstream in(out_file);
+    output->assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  return rc;
+}
+
+void writeFile(const fs::path& p, const std::string& text) {
+  std::ofstream out(p);
+  out << text;
+}
+
+}  // namespace
+
+TEST(EvalTool, ScoresAndRejectsBadInput) {
+  if (!fs::exists(toolPath())) GTEST_SKIP() << "pcl_movers_eval not built at " << toolPath();
+  const fs::path dir = fs::temp_directory_path() / "pcl_movers_eval_test";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string header =
+      "frame,time,track_id,mover,x,y,z,wx,wy,wz,vx,vy,speed,length,width,height,yaw,similarity,"
+      "points\n";
+  writeFile(dir / "objects.txt",
+            "# frame track_id class cx cy cz length width height yaw moving speed_mps n_points\n"
+            "0 0 Van 10 0 0 4 2 2 0 1 5 100\n1 0 Van 10.5 0 0 4 2 2 0 1 5 100\n");
+  writeFile(dir / "tracks.csv", header + "1,0.1,3,1,10.4,0,0,10.4,0,0,5,0,5,4,2,2,0,0.9,80\n");
+  std::string out;
+  ASSERT_EQ(
+      runTool((dir / "objects.txt").string() + " " + (dir / "tracks.csv").string() + " --png " +
+                  (dir / "c.png").string() + " --json " + (dir / "s.json").string(),
+              &out),
+      0)
+      << out;
+  EXPECT_NE(out.find("| 0 | Van | 2 | 1 | 50.0 | 1 |"), std::string::npos) << out;
+  EXPECT_TRUE(fs::file_size(dir / "c.png") > 100);
+  EXPECT_TRUE(fs::file_size(dir / "s.json") > 100);
+  // Existing outputs are not replaced without --overwrite.
+  EXPECT_NE(runTool((dir / "objects.txt").string() + " " + (dir / "tracks.csv").string() +
+                    " --json " + (dir / "s.json").string()),
+            0);
+  // Missing file, unknown flag, malformed number, malformed rows: non-zero exit, file named.
+  EXPECT_NE(runTool((dir / "nope.txt").string() + " " + (dir / "tracks.csv").string(), &out), 0);
+  EXPECT_NE(out.find("nope.txt"), std::string::npos) << out;
+  EXPECT_NE(
+      runTool((dir / "objects.txt").string() + " " + (dir / "tracks.csv").string() + " --bogus"),
+      0);
+  EXPECT_NE(runTool((dir / "objects.txt").string() + " " + (dir / "tracks.csv").string() +
+                    " --sector-deg abc"),
+            0);
+  writeFile(dir / "bad_objects.txt", "0 0 Van 10 0 0 4 2 2 0 1 5 100\n0 1 Van ten 0\n");
+  EXPECT_NE(runTool((dir / "bad_objects.txt").string() + " " + (dir / "tracks.csv").string(), &out),
+            0);
+  EXPECT_NE(out.find("bad_objects.txt:2"), std::string::npos) << out;
+  writeFile(dir / "bad_tracks.csv", header + "1,0.1,3,1,x\n");
+  EXPECT_NE(runTool((dir / "objects.txt").string() + " " + (dir / "bad_tracks.csv").string(), &out),
+            0);
+  EXPECT_NE(out.find("bad_tracks.csv:2"), std::string::npos) << out;
+  EXPECT_NE(runTool((dir / "objects.txt").string()), 0);  // TRACKS missing
+  fs::remove_all(dir);
+}

@@ -1,0 +1,247 @@
+/*
+ * Tests of pcl_movers::RangeImageRegionGrowing on small ray-cast range images with known objects.
+ * SPDX-License-Identifier: BSD-3-Clause
+ */
+#include <pcl_movers/range_image_region_growing.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <vector>
+
+using pcl_movers::RangeImageRegionGrowing;
+using Cloud = pcl::PointCloud<pcl::PointXYZ>;
+
+namespace {
+
+struct Box {
+  Eigen::Vector3f min, max;
+};
+
+/** Ray-casts axis-aligned boxes into an organized cloud: `rows` beams from +10° to -10°, `columns`
+ * azimuth steps over 360° (column 0 looks backwards, azimuth decreasing with column as in
+ * SensorModel). Misses are NaN. */
+Cloud::Ptr rayCast(const std::vector<Box>& boxes, int rows = 32, int columns = 720) {
+  Cloud::Ptr cloud(new Cloud(columns, rows));
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < columns; ++c) {
+      const float elevation = (10.f - 20.f * float(r) / float(rows - 1)) * float(M_PI) / 180.f;
+      const float azimuth = float(M_PI) - (float(c) + 0.5f) * 2.f * float(M_PI) / float(columns);
+      const Eigen::Vector3f dir(std::cos(elevation) * std::cos(azimuth),
+                                std::cos(elevation) * std::sin(azimuth), std::sin(elevation));
+      float best = std::numeric_limits<float>::infinity();
+      for (const auto& box : boxes) {  // slab method
+        float t0 = 0.f, t1 = std::numeric_limits<float>::infinity();
+        for (int a = 0; a < 3; ++a) {
+          const float inv = 1.f / dir[a];
+          float ta = box.min[a] * inv, tb = box.max[a] * inv;
+          if (ta > tb) std::swap(ta, tb);
+          t0 = std::max(t0, ta);
+          t1 = std::min(t1, tb);
+        }
+        if (t0 <= t1 && t0 > 0.f) best = std::min(best, t0);
+      }
+      auto& p = cloud->at(c, r);
+      if (std::isfinite(best))
+        p.getVector3fMap() = best * dir;
+      else
+        p.x = p.y = p.z = nan;
+    }
+  cloud->is_dense = false;
+  return cloud;
+}
+
+std::vector<pcl::PointIndices> segment(const Cloud::Ptr& cloud, float k = 0.05f, bool wrap = true,
+                                       int gap = 2) {
+  RangeImageRegionGrowing<pcl::PointXYZ> rg;
+  rg.setInputCloud(cloud);
+  rg.setDepthThresholdFactor(k);
+  rg.setWrapAround(wrap);
+  rg.setMaxGap(gap);
+  std::vector<pcl::PointIndices> clusters;
+  rg.segment(clusters);
+  return clusters;
+}
+
+std::size_t finiteCount(const Cloud& cloud) {
+  std::size_t n = 0;
+  for (const auto& p : cloud) n += std::isfinite(p.x);
+  return n;
+}
+
+/** A box in front of the sensor at range `d`, and a second one 1 m further that starts where the
+ * first one ends in azimuth (they touch in the range image). Sizes scale with d so both cover the
+ * same image cells at any range. */
+std::vector<Box> steppedPair(float d) {
+  const float s = d / 5.f;
+  return {Box{{d, -1.0f * s, -0.6f * s}, {d + 0.5f, 0.0f, 0.6f * s}},
+          Box{{d + 1.f, -0.01f * s, -0.6f * s}, {d + 1.5f, 1.0f * s, 0.6f * s}}};
+}
+
+}  // namespace
+
+TEST(RangeImageRegionGrowing, DepthProportionalThresholdAt5mAnd60m) {
+  // At 5 m a 1 m depth step is 20 % of the range: two objects. At 60 m the same 1 m step is
+  // under the 5 % threshold (3 m): one object, as the sampling there cannot resolve the gap.
+  const auto near = segment(rayCast(steppedPair(5.f)));
+  EXPECT_EQ(near.size(), 2u);
+  const auto far = segment(rayCast(steppedPair(60.f)));
+  EXPECT_EQ(far.size(), 1u);
+  // A fixed (non-proportional) threshold could not do both: with k = 0 and only the 0.1 m floor
+  // the far pair splits too.
+  EXPECT_GE(segment(rayCast(steppedPair(60.f)), 0.f).size(), 2u);
+}
+
+TEST(RangeImageRegionGrowing, SeparateObjectsAndAllPointsAssigned) {
+  const std::vector<Box> boxes = {
+      {{8.f, -1.f, -1.f}, {12.f, 1.f, 0.5f}},    // car ahead
+      {{-6.f, 3.f, -1.f}, {-5.5f, 3.5f, 0.8f}},  // person behind-left
+      {{2.f, -20.f, -1.f}, {20.f, -19.f, 2.f}},  // wall on the right
+  };
+  const auto cloud = rayCast(boxes);
+  const auto clusters = segment(cloud);
+  ASSERT_EQ(clusters.size(), 3u);
+  std::size_t total = 0;
+  for (const auto& c : clusters) total += c.indices.size();
+  EXPECT_EQ(total, finiteCount(*cloud));
+  // Largest first.
+  EXPECT_GE(clusters[0].indices.size(), clusters[1].indices.size());
+  EXPECT_GE(clusters[1].indices.size(), clusters[2].indices.size());
+  // Each cluster lies within one box.
+  for (const auto& c : clusters) {
+    int box_of_first = -1;
+    for (const auto i : c.indices) {
+      const Eigen::Vector3f p = (*cloud)[i].getVector3fMap();
+      int which = -1;
+      for (std::size_t b = 0; b < boxes.size(); ++b)
+        if ((p.array() >= boxes[b].min.array() - 1e-3f).all() &&
+            (p.array() <= boxes[b].max.array() + 1e-3f).all())
+          which = static_cast<int>(b);
+      ASSERT_GE(which, 0);
+      if (box_of_first < 0) box_of_first = which;
+      EXPECT_EQ(which, box_of_first);
+    }
+  }
+}
+
+TEST(RangeImageRegionGrowing, WrapAroundJoinsClusterSplitAtAzimuthPi) {
+  // A box straight behind the sensor spans the first and last columns of the image.
+  const auto cloud = rayCast({{{-10.f, -1.f, -1.f}, {-9.f, 1.f, 1.f}}});
+  ASSERT_TRUE(std::isfinite(cloud->at(0, 16).x));
+  ASSERT_TRUE(std::isfinite(cloud->at(cloud->width - 1, 16).x));
+  EXPECT_EQ(segment(cloud, 0.05f, true).size(), 1u);
+  EXPECT_EQ(segment(cloud, 0.05f, false).size(), 2u);
+}
+
+TEST(RangeImageRegionGrowing, GapBridgingOverEmptyCells) {
+  const auto cloud = rayCast({{{10.f, -2.f, -1.f}, {11.f, 2.f, 1.f}}});
+  // Blank two whole columns through the object (a dark window, a lost return).
+  int blanked = 0;
+  for (std::uint32_t c = 0; c < cloud->width && blanked < 2; ++c)
+    if (std::isfinite(cloud->at(c, 16).x) && std::isfinite(cloud->at(c + 3, 16).x)) {
+      for (std::uint32_t r = 0; r < cloud->height; ++r)
+        for (std::uint32_t cc = c + 1; cc <= c + 2; ++cc)
+          cloud->at(cc, r).x = std::numeric_limits<float>::quiet_NaN();
+      blanked = 2;
+    }
+  ASSERT_EQ(blanked, 2);
+  EXPECT_EQ(segment(cloud, 0.05f, true, 0).size(), 2u);  // the paper's strict rule splits it
+  EXPECT_EQ(segment(cloud, 0.05f, true, 2).size(), 1u);  // bridging two empty cells joins it
+}
+
+TEST(RangeImageRegionGrowing, ClusterSizeLimits) {
+  const std::vector<Box> boxes = {{{8.f, -1.f, -1.f}, {12.f, 1.f, 0.5f}},
+                                  {{-6.f, 3.f, -0.2f}, {-5.9f, 3.1f, 0.2f}}};
+  const auto cloud = rayCast(boxes);
+  const auto all = segment(cloud);
+  ASSERT_EQ(all.size(), 2u);
+  const int small = static_cast<int>(all[1].indices.size());
+  RangeImageRegionGrowing<pcl::PointXYZ> rg;
+  rg.setInputCloud(cloud);
+  rg.setMinClusterSize(small + 1);
+  std::vector<pcl::PointIndices> clusters;
+  rg.segment(clusters);
+  ASSERT_EQ(clusters.size(), 1u);
+  EXPECT_EQ(clusters[0].indices, all[0].indices);
+  rg.setMinClusterSize(1);
+  rg.setMaxClusterSize(small);
+  rg.segment(clusters);
+  ASSERT_EQ(clusters.size(), 1u);
+  EXPECT_EQ(clusters[0].indices, all[1].indices);
+}
+
+TEST(RangeImageRegionGrowing, IndicesRestrictTheInput) {
+  const auto cloud = rayCast({{{8.f, -1.f, -1.f}, {12.f, 1.f, 0.5f}}});
+  const auto all = segment(cloud);
+  ASSERT_EQ(all.size(), 1u);
+  // Keep only every cell of the left half of the object's columns.
+  pcl::IndicesPtr subset(new pcl::Indices);
+  std::uint32_t min_col = cloud->width, max_col = 0;
+  for (const auto i : all[0].indices) {
+    min_col = std::min<std::uint32_t>(min_col, i % cloud->width);
+    max_col = std::max<std::uint32_t>(max_col, i % cloud->width);
+  }
+  for (const auto i : all[0].indices)
+    if (i % cloud->width <= (min_col + max_col) / 2) subset->push_back(i);
+  RangeImageRegionGrowing<pcl::PointXYZ> rg;
+  rg.setInputCloud(cloud);
+  rg.setIndices(subset);
+  std::vector<pcl::PointIndices> clusters;
+  rg.segment(clusters);
+  ASSERT_EQ(clusters.size(), 1u);
+  EXPECT_EQ(clusters[0].indices, *subset);
+}
+
+TEST(RangeImageRegionGrowing, SensorOriginIsTheRangeReference) {
+  // The stepped pair at 5 m is two clusters. Moved 100 m away together with the sensor origin it
+  // must stay two; measured from the frame origin (ranges ~105 m, threshold ~5 m) it would be one.
+  const auto cloud = rayCast(steppedPair(5.f));
+  ASSERT_EQ(segment(cloud).size(), 2u);
+  const Eigen::Vector3f shift(100.f, -30.f, 4.f);
+  for (auto& p : *cloud) p.getVector3fMap() += shift;
+  EXPECT_EQ(segment(cloud).size(), 1u);
+  cloud->sensor_origin_ = Eigen::Vector4f(shift.x(), shift.y(), shift.z(), 0.f);
+  EXPECT_EQ(segment(cloud).size(), 2u);
+}
+
+TEST(RangeImageRegionGrowing, EmptyNanAndUnorganizedInputs) {
+  std::vector<pcl::PointIndices> clusters(3);
+  RangeImageRegionGrowing<pcl::PointXYZ> rg;
+
+  Cloud::Ptr empty(new Cloud);
+  rg.setInputCloud(empty);
+  rg.segment(clusters);
+  EXPECT_TRUE(clusters.empty());
+
+  const auto nans = rayCast({});
+  ASSERT_EQ(finiteCount(*nans), 0u);
+  clusters.resize(2);
+  rg.setInputCloud(nans);
+  rg.segment(clusters);
+  EXPECT_TRUE(clusters.empty());
+
+  Cloud::Ptr unorganized(new Cloud);
+  for (int i = 0; i < 100; ++i) unorganized->push_back(pcl::PointXYZ(10.f, 0.01f * i, 0.f));
+  clusters.resize(2);
+  rg.setInputCloud(unorganized);
+  rg.segment(clusters);
+  EXPECT_TRUE(clusters.empty());
+}
+
+TEST(RangeImageRegionGrowing, WorksForPointXYZI) {
+  pcl::PointCloud<pcl::PointXYZI>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZI>(4, 2));
+  for (std::uint32_t c = 0; c < 4; ++c) {
+    cloud->at(c, 0).getVector3fMap() = Eigen::Vector3f(10.f, 0.1f * c, 0.f);
+    cloud->at(c, 1).getVector3fMap() = Eigen::Vector3f(c < 2 ? 10.f : 20.f, 0.1f * c, -0.1f);
+  }
+  RangeImageRegionGrowing<pcl::PointXYZI> rg;
+  rg.setInputCloud(cloud);
+  rg.setWrapAround(false);
+  std::vector<pcl::PointIndices> clusters;
+  rg.segment(clusters);
+  ASSERT_EQ(clusters.size(), 2u);
+  EXPECT_EQ(clusters[0].indices, (pcl::Indices{0, 1, 2, 3, 4, 5}));
+  EXPECT_EQ(clusters[1].indices, (pcl::Indices{6, 7}));
+}

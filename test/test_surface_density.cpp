@@ -1,0 +1,174 @@
+/*
+ * SPDX-License-Identifier: BSD-3-Clause
+ */
+#include <pcl_movers/surface_density.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <random>
+
+using pcl_movers::SurfaceDensity;
+
+namespace {
+
+/** Points on the two visible faces of a 4 × 1.8 × 1.5 m box, seen from the origin side. */
+pcl::PointCloud<pcl::PointXYZ> boxSurface(const Eigen::Vector3f& centre, unsigned seed,
+                                          int n = 400) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(-0.5f, 0.5f);
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  for (int i = 0; i < n; ++i) {
+    if (i % 2 == 0)  // face towards -x
+      cloud.push_back(
+          pcl::PointXYZ(centre.x() - 0.9f, centre.y() + 4.f * u(rng), centre.z() + 1.5f * u(rng)));
+    else  // face towards -y
+      cloud.push_back(
+          pcl::PointXYZ(centre.x() + 1.8f * u(rng), centre.y() - 2.f, centre.z() + 1.5f * u(rng)));
+  }
+  return cloud;
+}
+
+}  // namespace
+
+TEST(SurfaceDensity, SumsToOneInsideAndLosesMassOutside) {
+  SurfaceDensity d;  // 29 × 29 × 7, 0.2 / 0.4 m
+  const Eigen::Vector3f centre(20.f, 3.f, 1.f);
+  d.compute(boxSurface(centre, 1), Eigen::Vector3f::Zero(), centre);
+  EXPECT_NEAR(d.totalMass(), 1.f, 1e-3f);
+  for (float v : d.values()) EXPECT_GE(v, 0.f);
+
+  // The same object with the grid centred 3 m away: part of the mass falls outside.
+  SurfaceDensity off;
+  off.compute(boxSurface(centre, 1), Eigen::Vector3f::Zero(), centre + Eigen::Vector3f(3, 0, 0));
+  EXPECT_LT(off.totalMass(), 0.9f);
+  EXPECT_GT(off.totalMass(), 0.05f);
+}
+
+TEST(SurfaceDensity, SingleGaussianIsCentredAndHasRangeProportionalWidth) {
+  // One point exactly at a cell centre: the density is symmetric around that cell; the spread
+  // grows with range (σ = sigma_per_metre · range).
+  SurfaceDensity near_d(31, 31, 7, 0.1f, 0.4f), far_d(31, 31, 7, 0.1f, 0.4f);
+  near_d.setMinSigma(0.01f);
+  far_d.setMinSigma(0.01f);
+  pcl::PointCloud<pcl::PointXYZ> one;
+  one.push_back(pcl::PointXYZ(10.f, 0.f, 0.f));
+  near_d.compute(one, Eigen::Vector3f::Zero(), Eigen::Vector3f(10.f, 0.f, 0.f));
+  pcl::PointCloud<pcl::PointXYZ> one_far;
+  one_far.push_back(pcl::PointXYZ(30.f, 0.f, 0.f));
+  far_d.compute(one_far, Eigen::Vector3f::Zero(), Eigen::Vector3f(30.f, 0.f, 0.f));
+  EXPECT_FLOAT_EQ(near_d.sigmaAtRange(10.f), 0.1f);
+  EXPECT_FLOAT_EQ(far_d.sigmaAtRange(30.f), 0.3f);
+  // Peak at the middle cell, symmetric neighbours.
+  EXPECT_NEAR(near_d.at(14, 15, 3), near_d.at(16, 15, 3), 1e-5f);
+  EXPECT_GT(near_d.at(15, 15, 3), near_d.at(14, 15, 3));
+  // Wider Gaussian: lower peak, more mass away from the centre.
+  EXPECT_GT(near_d.at(15, 15, 3), 3.f * far_d.at(15, 15, 3));
+  EXPECT_GT(far_d.at(20, 15, 3), near_d.at(20, 15, 3));
+  // Second moment along x matches σ² (cell integration adds ≈ cell²/12).
+  double m2 = 0.0, m = 0.0;
+  for (int ix = 0; ix < 31; ++ix)
+    for (int iy = 0; iy < 31; ++iy)
+      for (int iz = 0; iz < 7; ++iz) {
+        const double x = (ix - 15) * 0.1;
+        m += far_d.at(ix, iy, iz);
+        m2 += far_d.at(ix, iy, iz) * x * x;
+      }
+  EXPECT_NEAR(std::sqrt(m2 / m), std::sqrt(0.09 + 0.01 / 12.0), 0.02);
+}
+
+TEST(SurfaceDensity, SqrtAndBhattacharyya) {
+  SurfaceDensity a, b, c;
+  const Eigen::Vector3f centre(15.f, -2.f, 0.5f);
+  a.compute(boxSurface(centre, 1), Eigen::Vector3f::Zero(), centre);
+  b.compute(boxSurface(centre, 1), Eigen::Vector3f::Zero(), centre);
+  for (std::size_t i = 0; i < a.size(); ++i)
+    ASSERT_NEAR(a.sqrtValues()[i] * a.sqrtValues()[i], a.values()[i], 1e-6f);
+  EXPECT_NEAR(SurfaceDensity::bhattacharyya(a, b), 1.f, 1e-3f);
+  // A different sampling of the same surface is still very similar; the surface moved by 0.6 m
+  // much less so.
+  c.compute(boxSurface(centre, 2), Eigen::Vector3f::Zero(), centre);
+  EXPECT_GT(SurfaceDensity::bhattacharyya(a, c), 0.9f);
+  SurfaceDensity moved;
+  moved.compute(boxSurface(centre + Eigen::Vector3f(0.6f, 0.f, 0.f), 1), Eigen::Vector3f::Zero(),
+                centre);
+  EXPECT_LT(SurfaceDensity::bhattacharyya(a, moved), 0.8f);
+}
+
+TEST(SurfaceDensity, NaNPointsAndEmptyClouds) {
+  SurfaceDensity d;
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  d.compute(cloud, Eigen::Vector3f::Zero(), Eigen::Vector3f::Zero());
+  EXPECT_TRUE(d.empty());
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  cloud.push_back(pcl::PointXYZ(nan, 0.f, 0.f));
+  cloud.push_back(pcl::PointXYZ(0.f, std::numeric_limits<float>::infinity(), 0.f));
+  d.compute(cloud, Eigen::Vector3f::Zero(), Eigen::Vector3f::Zero());
+  EXPECT_TRUE(d.empty());
+  cloud.push_back(pcl::PointXYZ(0.2f, 0.f, 0.f));
+  d.compute(cloud, Eigen::Vector3f::Zero(), Eigen::Vector3f::Zero());
+  EXPECT_NEAR(d.totalMass(), 1.f, 1e-3f);  // the only valid point carries all the mass
+}
+
+TEST(SurfaceDensity, AccumulateWithHalfLife) {
+  EXPECT_NEAR(SurfaceDensity::halfLifeWeight(1.f), 0.5f, 1e-6f);
+  const float w = SurfaceDensity::halfLifeWeight(3.f);
+  EXPECT_NEAR(std::pow(1.f - w, 3.f), 0.5f, 1e-5f);
+
+  const Eigen::Vector3f centre(20.f, 0.f, 0.f);
+  SurfaceDensity model, a, b;
+  a.compute(boxSurface(centre, 1), Eigen::Vector3f::Zero(), centre);
+  b.compute(boxSurface(centre + Eigen::Vector3f(0.8f, 0.f, 0.f), 3), Eigen::Vector3f::Zero(),
+            centre);
+  model = SurfaceDensity();
+  model.setCentre(centre);
+  model.accumulate(a, w);  // empty model takes the first view whole
+  EXPECT_NEAR(SurfaceDensity::bhattacharyya(model, a), 1.f, 1e-3f);
+  // After 3 views of b, a's weight has halved: the mixture is 50/50.
+  for (int i = 0; i < 3; ++i) model.accumulate(b, w);
+  for (std::size_t i = 0; i < model.size(); i += 37)
+    EXPECT_NEAR(model.values()[i], 0.5f * (a.values()[i] + b.values()[i]), 1e-5f);
+  EXPECT_NEAR(model.totalMass(), 1.f, 2e-3f);
+
+  SurfaceDensity other_size(9, 9, 3, 0.2f, 0.4f);
+  EXPECT_THROW(model.accumulate(other_size, 0.5f), std::invalid_argument);
+}
+
+TEST(SurfaceDensity, TranslateAndShift) {
+  const Eigen::Vector3f centre(20.f, 0.f, 0.f);
+  SurfaceDensity a, b;
+  a.compute(boxSurface(centre, 1), Eigen::Vector3f::Zero(), centre);
+  // Whole-cell shift: exactly the density of the moved object (on the same grid).
+  b.compute(boxSurface(centre + Eigen::Vector3f(0.4f, -0.2f, 0.f), 1), Eigen::Vector3f::Zero(),
+            centre);
+  const SurfaceDensity s = a.shifted(Eigen::Vector3f(0.4f, -0.2f, 0.f));
+  EXPECT_GT(SurfaceDensity::bhattacharyya(s, b), 0.999f);
+  EXPECT_EQ(s.getCentre(), a.getCentre());
+  // Fractional shift: close, slightly blurred.
+  SurfaceDensity c;
+  c.compute(boxSurface(centre + Eigen::Vector3f(0.1f, 0.f, 0.f), 1), Eigen::Vector3f::Zero(),
+            centre);
+  EXPECT_GT(SurfaceDensity::bhattacharyya(a.shifted(Eigen::Vector3f(0.1f, 0.f, 0.f)), c), 0.99f);
+  EXPECT_LT(SurfaceDensity::bhattacharyya(a, c),
+            SurfaceDensity::bhattacharyya(a.shifted(Eigen::Vector3f(0.1f, 0.f, 0.f)), c));
+  // translate() moves the grid with the content: values unchanged, centre moved.
+  SurfaceDensity t = a;
+  t.translate(Eigen::Vector3f(1.f, 2.f, 0.f));
+  EXPECT_EQ(t.values(), a.values());
+  EXPECT_TRUE(t.getCentre().isApprox(centre + Eigen::Vector3f(1.f, 2.f, 0.f)));
+  // accumulate() of a view on a displaced grid resamples it into place.
+  SurfaceDensity model = a;
+  SurfaceDensity view_displaced = b;                   // b lives on a grid at `centre`
+  model.translate(Eigen::Vector3f(0.4f, -0.2f, 0.f));  // model grid now where b's content is
+  SurfaceDensity expected = a;
+  model.accumulate(view_displaced, 1.f);  // take the view only, resampled onto the model grid
+  // b's content seen from the moved grid equals a's content (a moved by the same offset).
+  EXPECT_GT(SurfaceDensity::bhattacharyya(model,
+                                          [&] {
+                                            SurfaceDensity e = expected;
+                                            e.translate(Eigen::Vector3f(0.4f, -0.2f, 0.f));
+                                            return e;
+                                          }()),
+            0.95f);
+}
