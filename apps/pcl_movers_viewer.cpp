@@ -7,9 +7,12 @@
  * this file only owns the VTK side: actors, camera, keys, image capture.
  * SPDX-License-Identifier: BSD-3-Clause
  */
+#include <pcl_movers/detector_parameters.h>
+#include <pcl_movers/ego_motion_estimator.h>
 #include <pcl_movers/io/ground_truth.h>
 #include <pcl_movers/io/sequence.h>
 #include <pcl_movers/io/tracks.h>
+#include <pcl_movers/mover_detector.h>
 #include <pcl_movers/viz/scene_style.h>
 
 #include "tool_utils.h"
@@ -45,10 +48,12 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <deque>
 #include <filesystem>
 #include <fstream>
 #include <functional>
 #include <map>
+#include <memory>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -79,12 +84,14 @@ struct ViewerParameters {
   double arrow_seconds = 1.0;  ///< velocity arrows reach where the object will be after this
   double rate = 10.0;          ///< frame rate when the sequence has no times.txt [Hz]
   bool overwrite = false;
+  bool live = false;   ///< --live: run MoverDetector while playing
+  std::string config;  ///< --config FILE: detector parameters for --live
 };
 
-const std::vector<std::string> kFlags = {"-h", "--help", "--ground-truth", "--overwrite"};
+const std::vector<std::string> kFlags = {"-h", "--help", "--ground-truth", "--overwrite", "--live"};
 const std::vector<std::string> kWithValue = {
-    "--detections", "--screenshot-dir", "--frames", "--size",          "--camera",
-    "--format",     "--point-size",     "--trail",  "--arrow-seconds", "--rate"};
+    "--detections", "--screenshot-dir", "--frames",        "--size", "--camera", "--format",
+    "--point-size", "--trail",          "--arrow-seconds", "--rate", "--config"};
 
 void printHelp(const char* program) {
   const ViewerParameters d;
@@ -99,7 +106,11 @@ void printHelp(const char* program) {
       "                        DIR/labelled/*.pcd if present (point classes); else points inside "
       "a\n"
       "                        track's box take its colour\n"
-      "  --ground-truth        also draw the ground-truth boxes of SEQUENCE/objects.txt (green)\n"
+      "  --live                run the detector (MoverDetector) while playing instead of reading\n"
+      "                        --detections; poses from the sequence, else estimated from the "
+      "scans\n"
+      "  --config FILE         detector parameters for --live (pcl_movers_detect --print-config)\n"
+      "  --ground-truth        also draw the ground-truth boxes of SEQUENCE/objects.txt (magenta)\n"
       "  --frames A:B          frames to show or render, 0-based inclusive; A:, :B, A also work\n"
       "                        (default: all)\n"
       "  --camera NAME         chase or bird (default: %s)\n"
@@ -122,7 +133,7 @@ void printHelp(const char* program) {
       "  s                     save a screenshot (viewer_NNNNNN.png in the current folder)\n"
       "  q                     quit\n\n"
       "Colours: ground dark grey, movers red with orange boxes, arrows and trails; stationary\n"
-      "tracks in cool per-track colours; other points grey by height; ground truth green;\n"
+      "tracks in cool per-track colours; other points grey by height; ground truth magenta;\n"
       "the selected track yellow.\n",
       program, d.camera.c_str(), d.point_size, d.trail, d.arrow_seconds, d.rate, d.size.c_str(),
       d.format.c_str());
@@ -171,6 +182,12 @@ ViewerParameters parseParameters(int argc, char** argv, std::string& sequence) {
   if (value("--rate", v)) p.rate = parseNumber("--rate", v, 0.01, 1000);
   p.ground_truth = pcl::console::find_switch(argc, argv, "--ground-truth");
   p.overwrite = pcl::console::find_switch(argc, argv, "--overwrite");
+  p.live = pcl::console::find_switch(argc, argv, "--live");
+  value("--config", p.config);
+  if (p.live && !p.detections.empty())
+    throw InputError(
+        "--live and --detections exclude each other (live detection makes the tracks)");
+  if (!p.config.empty() && !p.live) throw InputError("--config only applies to --live");
   if (p.format != "png" && p.format != "ppm")
     throw InputError("--format " + p.format + ": use png or ppm");
   if (!p.screenshot_dir.empty() && p.screenshot_dir == sequence)
@@ -305,6 +322,68 @@ void loadScene(const std::string& sequence, const ViewerParameters& p, SceneData
   }
 }
 
+/** Live detection (--live): runs MoverDetector frame by frame as the viewer reaches new frames. The
+ * tracker is sequential, so frames are processed in order from the first frame shown; the last
+ * kCached frames keep their organized clouds and labels for display, older ones are drawn from
+ * their rows like --detections without labelled clouds. */
+class LiveDetector {
+ public:
+  using Detector = MoverDetector<pcl::PointXYZI>;
+  static constexpr std::size_t kCached = 30;
+
+  LiveDetector(const SceneData& scene, const ViewerParameters& p, std::size_t first)
+      : scene_(scene), next_(first) {
+    DetectorParameters params;
+    if (!p.config.empty()) params.readConfig(p.config);
+    detector_.setParameters(params);
+  }
+
+  /** Processes every frame up to and including i (no-op when done already). */
+  void ensure(std::size_t i) {
+    while (next_ <= i) {
+      pcl::PointCloud<pcl::PointXYZI>::Ptr scan(new pcl::PointCloud<pcl::PointXYZI>);
+      scene_.reader.read(next_, *scan);
+      const Eigen::Isometry3d pose =
+          scene_.reader.hasPoses() ? scene_.reader.pose(next_) : ego_.estimate(*scan);
+      scan->sensor_origin_.setZero();
+      scan->sensor_orientation_.setIdentity();
+      auto result = std::make_shared<Detector::FrameResult>();
+      try {
+        detector_.process(scan, pose, scene_.reader.time(next_), static_cast<int>(next_), *result);
+      } catch (const InputError& e) {
+        throw InputError(scene_.reader.framePaths()[next_] + ": " + e.what());
+      }
+      rows_.insert(rows_.end(), result->rows.begin(), result->rows.end());
+      cache_.emplace_back(next_, result);
+      if (cache_.size() > kCached) cache_.pop_front();
+      ++next_;
+      dirty_ = true;
+    }
+  }
+  /** All rows so far, re-indexed only when new frames were processed. */
+  const viz::TrackIndex& tracks() {
+    if (dirty_) index_ = viz::TrackIndex(rows_);
+    dirty_ = false;
+    return index_;
+  }
+  /** The detector's output of frame i if still cached, else null. */
+  std::shared_ptr<const Detector::FrameResult> frame(std::size_t i) const {
+    for (const auto& c : cache_)
+      if (c.first == i) return c.second;
+    return nullptr;
+  }
+
+ private:
+  const SceneData& scene_;
+  Detector detector_;
+  EgoMotionEstimator<pcl::PointXYZI> ego_;
+  std::size_t next_;
+  std::vector<io::TrackRow> rows_;
+  std::deque<std::pair<std::size_t, std::shared_ptr<const Detector::FrameResult>>> cache_;
+  viz::TrackIndex index_;
+  bool dirty_ = true;
+};
+
 /** Per-key behaviour without PCLVisualizer's own bindings for the same keys (its '1' recolours
  * clouds, 's' switches to surfaces, 'p' to points, '+'/'-' change point size), which would fight
  * with ours. Keys we do not use keep PCL's behaviour (mouse, 'r' reset, 'q' quit, ...). */
@@ -365,20 +444,35 @@ class FrameRenderer {
   }
 
   pcl::visualization::PCLVisualizer& viewer() { return *viewer_; }
+  void setLive(LiveDetector* live) { live_ = live; }
+  const viz::TrackIndex& tracks() const { return live_ ? live_->tracks() : scene_.tracks; }
   ViewerInteractorStyle* style() { return style_; }
   int selectedTrack() const { return selected_; }
   void setSelectedTrack(int id) { selected_ = id; }
   const std::vector<io::TrackRow>& rows(std::size_t frame) const {
-    return scene_.tracks.frame(static_cast<int>(frame));
+    return tracks().frame(static_cast<int>(frame));
   }
 
   /** Loads frame i and replaces all actors. `status` is appended to the overlay. */
   void show(std::size_t i, const std::string& status = "") {
     pcl::PointCloud<pcl::PointXYZI> cloud;
     viz::PointLabels labels;
+    if (live_) live_->ensure(i);
+    const auto live_frame = live_ ? live_->frame(i) : nullptr;
     const auto& rows = this->rows(i);
     const std::string labelled = labelledPath(i);
-    if (!labelled.empty()) {
+    if (live_frame && live_frame->organized) {
+      cloud = *live_frame->organized;
+      const std::size_t n = cloud.size();
+      labels.classes.assign(n, viz::PointClass::Unassigned);
+      labels.track_ids.assign(n, -1);
+      // MoverDetector::Label and viz::PointClass share their values (0 none .. 3 mover).
+      for (std::size_t k = 0; k < n && k < live_frame->labels.size(); ++k)
+        if (live_frame->labels[k] <= 3)
+          labels.classes[k] = static_cast<viz::PointClass>(live_frame->labels[k]);
+      for (std::size_t k = 0; k < n && k < live_frame->track_ids.size(); ++k)
+        labels.track_ids[k] = live_frame->track_ids[k];
+    } else if (!labelled.empty()) {
       readLabelledCloud(labelled, cloud, labels);
     } else {
       scene_.reader.read(i, cloud);
@@ -436,9 +530,8 @@ class FrameRenderer {
       }
       if ((r.mover || is_selected) && params_.trail > 0) {
         const auto trail =
-            pose ? scene_.tracks.trail(r.track_id, static_cast<int>(i), params_.trail,
-                                       world_to_sensor)
-                 : scene_.tracks.sensorTrail(r.track_id, static_cast<int>(i), params_.trail);
+            pose ? tracks().trail(r.track_id, static_cast<int>(i), params_.trail, world_to_sensor)
+                 : tracks().sensorTrail(r.track_id, static_cast<int>(i), params_.trail);
         target.addPolyline(trail, box_color);
       }
     }
@@ -458,7 +551,7 @@ class FrameRenderer {
     const double t = scene_.reader.time(i);
     const std::string text =
         viz::overlayText(i, scene_.reader.size(), t, mover_count, selected, extra) +
-        (scene_.has_tracks ? "" : "\n(no --detections: points only)");
+        (scene_.has_tracks || live_ ? "" : "\n(no --detections: points only)");
     // VTK anchors multi-line text at its bottom-left corner: place it so the first line sits at
     // the top of the window whatever the number of lines.
     const int text_lines = 1 + static_cast<int>(std::count(text.begin(), text.end(), '\n'));
@@ -470,7 +563,7 @@ class FrameRenderer {
                        "overlay");
     std::string legend =
         "red: mover points   orange: mover box/arrow/trail   colours: static tracks";
-    if (scene_.has_ground_truth) legend += "   green: ground truth";
+    if (scene_.has_ground_truth) legend += "   magenta: ground truth";
     const int legend_size = std::max(9, font_size_ - 4);
     if (!viewer_->updateText(legend, 12, 8, legend_size, 0.7, 0.7, 0.7, "legend"))
       viewer_->addText(legend, 12, 8, legend_size, 0.7, 0.7, 0.7, "legend");
@@ -589,6 +682,7 @@ class FrameRenderer {
   ViewerInteractorStyle* style_ = nullptr;
   vtkRenderer* renderer_ = nullptr;
   vtkSmartPointer<vtkActor> thin_actor_, thick_actor_;
+  LiveDetector* live_ = nullptr;
 };
 
 bool hasDisplay() {
@@ -606,6 +700,9 @@ int renderScreenshots(const SceneData& scene, const ViewerParameters& p, viz::Fr
   std::vector<std::string> written;
   try {
     FrameRenderer renderer(scene, p, true, width, height);
+    std::unique_ptr<LiveDetector> live;
+    if (p.live) live.reset(new LiveDetector(scene, p, range.first));
+    renderer.setLive(live.get());
     tools::ProgressBar bar(range.last - range.first + 1, "frames");
     for (std::size_t i = range.first; i <= range.last; ++i) {
       renderer.show(i);
@@ -640,6 +737,9 @@ std::string freeScreenshotName(std::size_t frame, const SceneData& scene) {
 int runInteractive(const SceneData& scene, const ViewerParameters& p, viz::FrameRange range,
                    int width, int height, viz::CameraPreset camera) {
   FrameRenderer renderer(scene, p, false, width, height);
+  std::unique_ptr<LiveDetector> live;
+  if (p.live) live.reset(new LiveDetector(scene, p, range.first));
+  renderer.setLive(live.get());
   std::size_t frame = range.first;
   bool playing = false, dirty = true, camera_dirty = true, screenshot = false;
   double speed = 1.0;

@@ -310,7 +310,7 @@ int report() {
       main_quality.overlapping_rows, main_quality.row_pairs);
   std::printf("| median CPU time per frame, `RangeImageOrganizer` | %.2f ms |\n", ours);
   std::printf(
-      "| median time per frame, `pcl::RangeImage::createFromPointCloud` (same cloud, "
+      "| median CPU time per frame, `pcl::RangeImage::createFromPointCloud` (same cloud, "
       "%.3f° × %.3f°) | %.2f ms |\n",
       360.0 / double(width), 27.0 / 64.0, theirs);
   std::printf("| speed-up | **%.1f×** |\n\n", theirs / ours);

@@ -112,6 +112,23 @@ int countRed(const Image& im) {
   return countRed(im, im.width / 2, im.height / 2, 1 << 20);
 }
 
+/** Red pixels inside the image rectangle covered by a box's projected corners (+ a few pixels). */
+int countRedInBox(const Image& im, const viz::CameraView& cam, const viz::OrientedBox& box,
+                  int grow = 4) {
+  double x0 = 1e9, y0 = 1e9, x1 = -1e9, y1 = -1e9;
+  for (const auto& c : box.corners()) {
+    const auto p = viz::projectToPixel(cam, c, im.width, im.height);
+    if (!p) return -1;
+    x0 = std::min(x0, p->x()), y0 = std::min(y0, p->y());
+    x1 = std::max(x1, p->x()), y1 = std::max(y1, p->y());
+  }
+  int n = 0;
+  for (int y = std::max(0, int(y0) - grow); y <= std::min(im.height - 1, int(y1) + grow); ++y)
+    for (int x = std::max(0, int(x0) - grow); x <= std::min(im.width - 1, int(x1) + grow); ++x)
+      n += isMoverRed(im.at(x, y));
+  return n;
+}
+
 /** A small synthetic sequence: flat ground, a mover box (track 7) driving along +x at 5 m/s and
  * a stationary pole (track 3); tracks.csv with both; identity poses advancing 1 m per frame. */
 struct SyntheticScene {
@@ -192,6 +209,8 @@ TEST(SceneStyle, TrackColorsAreCoolAndDistinct) {
     EXPECT_LT(c.r, std::max(c.g, c.b)) << "track " << id;
     EXPECT_NE(c, style.mover_points);
     EXPECT_NE(c, style.mover_box);
+    // Not magenta-like either (ground truth): green must not be the weakest channel by far.
+    EXPECT_FALSE(c.r > 150 && c.b > 150 && c.g < 120) << "track " << id;
     seen.insert({c.r, c.g, c.b});
     if (id > 0) {
       const viz::Color p = viz::trackColor(id - 1);

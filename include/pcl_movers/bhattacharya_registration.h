@@ -19,6 +19,8 @@ namespace pcl_movers {
  * values[(yaw · ny + iy) · nx + ix] is B for the source translated by
  * ((ix - (nx-1)/2)·resolution, (iy - (ny-1)/2)·resolution) from the guess and turned by yaws[yaw]
  * about its centroid. With z search on, each value is the best over the searched z shifts.
+ * Yaw layers other than the middle one are only evaluated near the peak (0 elsewhere) unless
+ * BhattacharyaRegistration::setFullYawWindow() is set.
  */
 struct SimilaritySurface {
   int nx = 0, ny = 0;
@@ -147,6 +149,14 @@ class BhattacharyaRegistration : public pcl::Registration<PointSource, PointTarg
   void setYawStep(float step) { yaw_step_ = step; }
   float getYawStep() const { return yaw_step_; }
 
+  /** \brief Correlate every yaw layer over the whole translation window (default false: only
+   * the middle layer covers the whole window; the others are evaluated around its peak and
+   * grown by hill climbing, several times faster with the same result when the turn does not
+   * move the peak by more than a few cells, which it cannot since layers turn about the source
+   * centroid). */
+  void setFullYawWindow(bool full) { full_yaw_window_ = full; }
+  bool getFullYawWindow() const { return full_yaw_window_; }
+
   /** \brief σ = max(min sigma, sigma per metre · range) of each point's Gaussian. */
   void setSigmaPerMetre(float sigma_per_metre) { sigma_per_metre_ = sigma_per_metre; }
   float getSigmaPerMetre() const { return sigma_per_metre_; }
@@ -201,6 +211,7 @@ class BhattacharyaRegistration : public pcl::Registration<PointSource, PointTarg
   float min_sigma_ = 0.1f;
   float min_similarity_ = 0.2f;
   bool search_z_ = false;
+  bool full_yaw_window_ = false;
   float search_radius_z_ = 0.4f;
   Eigen::Vector3f sensor_origin_ = Eigen::Vector3f::Zero();
   bool use_sensor_origin_ = false;

@@ -3,15 +3,87 @@
  */
 #pragma once
 
-#include <pcl/kdtree/kdtree_flann.h>
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 
 #include <Eigen/Geometry>
+#include <cmath>
+#include <cstdint>
 #include <deque>
+#include <unordered_map>
 #include <vector>
 
 namespace pcl_movers {
+namespace detail {
+
+/** \brief Points hashed into cubic cells, for nearest-neighbour and radius queries no further than
+ * one cell. Used instead of pcl::KdTreeFLANN because FLANN opens an OpenMP region per query, which
+ * cost more than the searches themselves (over half the run time, and far worse on a loaded
+ * machine), and because a hash grid is built in linear time when the map changes. */
+class PointHashGrid {
+ public:
+  void build(const std::vector<Eigen::Vector3f>& points, float cell) {
+    points_ = &points;
+    cell_ = cell;
+    cells_.clear();
+    cells_.reserve(points.size() / 4 + 1);
+    for (std::size_t i = 0; i < points.size(); ++i)
+      cells_[key(points[i])].push_back(static_cast<int>(i));
+  }
+  /** \brief Index of the nearest point within `max_dist` (<= the cell size), or -1. */
+  int nearest(const Eigen::Vector3f& q, float max_dist, float& best_d2) const {
+    best_d2 = max_dist * max_dist;
+    int best = -1;
+    forNeighbourCells(q, [&](const std::vector<int>& ids) {
+      for (int i : ids) {
+        const float d2 = ((*points_)[i] - q).squaredNorm();
+        if (d2 <= best_d2) {
+          best_d2 = d2;
+          best = i;
+        }
+      }
+    });
+    return best;
+  }
+  /** \brief Indices of the points within `radius` (<= the cell size). */
+  void radius(const Eigen::Vector3f& q, float radius, std::vector<int>& out) const {
+    out.clear();
+    const float r2 = radius * radius;
+    forNeighbourCells(q, [&](const std::vector<int>& ids) {
+      for (int i : ids)
+        if (((*points_)[i] - q).squaredNorm() <= r2) out.push_back(i);
+    });
+  }
+
+ private:
+  static std::int64_t pack(std::int64_t x, std::int64_t y, std::int64_t z) {
+    // 21 bits per axis: +-1M cells, i.e. +-500 km at 0.5 m.
+    return ((x & 0x1FFFFF) << 42) | ((y & 0x1FFFFF) << 21) | (z & 0x1FFFFF);
+  }
+  std::int64_t key(const Eigen::Vector3f& p) const {
+    return pack(static_cast<std::int64_t>(std::floor(p.x() / cell_)),
+                static_cast<std::int64_t>(std::floor(p.y() / cell_)),
+                static_cast<std::int64_t>(std::floor(p.z() / cell_)));
+  }
+  template <typename F>
+  void forNeighbourCells(const Eigen::Vector3f& q, F&& f) const {
+    const std::int64_t cx = static_cast<std::int64_t>(std::floor(q.x() / cell_)),
+                       cy = static_cast<std::int64_t>(std::floor(q.y() / cell_)),
+                       cz = static_cast<std::int64_t>(std::floor(q.z() / cell_));
+    for (std::int64_t dx = -1; dx <= 1; ++dx)
+      for (std::int64_t dy = -1; dy <= 1; ++dy)
+        for (std::int64_t dz = -1; dz <= 1; ++dz) {
+          const auto it = cells_.find(pack(cx + dx, cy + dy, cz + dz));
+          if (it != cells_.end()) f(it->second);
+        }
+  }
+
+  const std::vector<Eigen::Vector3f>* points_ = nullptr;
+  float cell_ = 1.f;
+  std::unordered_map<std::int64_t, std::vector<int>> cells_;
+};
+
+}  // namespace detail
 
 /** \brief Estimates the sensor's pose from the scans themselves, for sequences recorded without
  * an INS (no poses.txt, no VIEWPOINT). The paper had an INS; this replaces it by LiDAR odometry.
@@ -114,6 +186,11 @@ class EgoMotionEstimator {
   void setConstantVelocity(bool enabled) { constant_velocity_ = enabled; }
   bool getConstantVelocity() const { return constant_velocity_; }
 
+  /** \brief Treat map normals within ~18 deg of vertical as exactly vertical, so that the
+   * ground constrains only z, roll and pitch (default true). */
+  void setVerticalGroundNormals(bool enabled) { vertical_ground_normals_ = enabled; }
+  bool getVerticalGroundNormals() const { return vertical_ground_normals_; }
+
   /** \brief Neighbours used for each point's normal (default 10). */
   void setNormalNeighbours(int k) { normal_neighbours_ = k; }
   int getNormalNeighbours() const { return normal_neighbours_; }
@@ -161,11 +238,12 @@ class EgoMotionEstimator {
   bool planar_motion_ = false;
   bool constant_velocity_ = true;
   int normal_neighbours_ = 10;
+  bool vertical_ground_normals_ = true;
 
   std::deque<Keyframe> keyframes_;
-  pcl::PointCloud<pcl::PointXYZ>::Ptr map_cloud_{new pcl::PointCloud<pcl::PointXYZ>};
-  std::vector<Eigen::Vector3f> map_normals_;
-  pcl::KdTreeFLANN<pcl::PointXYZ> map_tree_;
+  std::vector<Eigen::Vector3f> map_points_;   ///< world frame, one per voxel
+  std::vector<Eigen::Vector3f> map_normals_;  ///< world frame
+  detail::PointHashGrid map_grid_;
   Eigen::Isometry3d pose_ = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d motion_ = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d keyframe_pose_ = Eigen::Isometry3d::Identity();

@@ -39,7 +39,9 @@ namespace pcl_movers {
  *     accumulated into the model with a half-life of `model_half_life` frames;
  *  5. unmatched tracks coast (prediction only) and are deleted after `max_missed_frames`;
  *     unmatched clusters start new tracks (at most `max_tracks` live tracks);
- *  6. mover decision: speed > `mover_speed` in `mover_votes` of the last `mover_window` updates,
+ *  6. mover decision: speed > `mover_speed` (and > `mover_speed_sigmas` times its own standard
+ *     deviation, so young or far tracks with vague velocities wait) in `mover_votes` of the last
+ *     `mover_window` updates,
  *     at least `mover_min_age` updates, and the net displacement of the measurements over the
  *     window at least `displacement_ratio`·`mover_speed`·elapsed time (a filter velocity inflated by
  *     a few noisy measurements does not survive this check).
@@ -48,6 +50,13 @@ namespace pcl_movers {
  * object was first seen and the registration maps each new view onto it, so the measured position
  * is that reference point moved by the registered motion. It does not shift when a different part
  * of the object is seen, which is the point of registering instead of using centroids.
+ *
+ * Cost control (documented design choice, `static_refresh_frames`): an established, slow,
+ * non-mover track whose single gated candidate's centroid moved less than `static_shift` is
+ * registered only every `static_refresh_frames` frames; in between it is marked seen without a
+ * Kalman update (its velocity is near zero anyway). Any centroid jump, ambiguity or speed-up
+ * brings registration back at once. `static_refresh_frames = 1` registers every track every frame,
+ * as in the paper.
  *
  * Practical limits (documented design choices): clusters longer than `max_mover_length` or taller
  * than `max_mover_height` (buildings, walls, hedges, tree rows) are tracked by centroid only and are
@@ -90,6 +99,7 @@ class MoverTracker {
     std::deque<char> fast;       ///< speed > mover_speed after each of the last updates
     std::deque<Eigen::Vector3d> history;  ///< (x, y, time) of the last measurements
     SurfaceDensity::Ptr model;   ///< accumulated surface density (registration mode)
+    int since_registration = 0;  ///< cheap (unregistered) frames since the last registration
   };
 
   /** \brief What happened to one input cluster in the last update(). */
@@ -145,6 +155,7 @@ class MoverTracker {
     Eigen::Vector3d measurement = Eigen::Vector3d::Zero();
     double similarity = 0;
     SurfaceDensity::ConstPtr view;  ///< registered view for model accumulation
+    bool cheap = false;             ///< static track seen without registration
   };
 
   /** \brief Registers candidate `c` against track `t`'s model around the predicted position. Fills

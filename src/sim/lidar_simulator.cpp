@@ -53,6 +53,31 @@ class Rng {
   std::uint64_t state_;
 };
 
+/** sin(x) from a 4096-entry table with linear interpolation (error < 3e-7): only used to find
+ * the bracket of a terrain crossing, which the exact function then refines. */
+class FastSin {
+ public:
+  FastSin() {
+    for (int i = 0; i <= kSize; ++i) table_[i] = std::sin(2.0 * M_PI * i / kSize);
+  }
+  double operator()(double x) const {
+    const double u = x * (kSize / (2.0 * M_PI));
+    const double fl = std::floor(u);
+    const int i = int(static_cast<std::int64_t>(fl) & (kSize - 1));
+    const double w = u - fl;
+    return table_[i] + w * (table_[i + 1] - table_[i]);
+  }
+
+ private:
+  static constexpr int kSize = 4096;
+  double table_[kSize + 1];
+};
+
+const FastSin& fastSin() {
+  static const FastSin table;
+  return table;
+}
+
 // ------------------------------------------------------------------ primitives
 enum class Shape { Box, Cylinder, Ellipsoid };
 
@@ -415,6 +440,7 @@ struct LidarSimulator::Scene {
   Eigen::Vector2d slope = Eigen::Vector2d::Zero();
   double amplitude = 0, k = 0, k2 = 0, p1 = 0, p2 = 0, p3 = 0, ca = 1, sa = 0;
   double gradient_bound = 0;  // Lipschitz bound of h, for safe ray-marching steps
+  double min_step = 1.0;      // smallest ray-marching step [m]
   Eigen::Isometry3d world_from_first = Eigen::Isometry3d::Identity();
 
   double terrain(double x, double y) const {
@@ -423,6 +449,26 @@ struct LidarSimulator::Scene {
       h += amplitude * (0.75 * std::sin(k * x + p1) * std::sin(k * y + p2) +
                         0.25 * std::sin(k2 * (x * ca + y * sa) + p3));
     return h;
+  }
+  /** terrain() with table sines, for bracketing only. */
+  double terrainFast(double x, double y) const {
+    const FastSin& fs = fastSin();
+    return height + slope.x() * x + slope.y() * y +
+           amplitude * (0.75 * fs(k * x + p1) * fs(k * y + p2) +
+                        0.25 * fs(k2 * (x * ca + y * sa) + p3));
+  }
+  /** terrainGradient() with table sines (shading only). */
+  Eigen::Vector2d terrainGradientFast(double x, double y) const {
+    Eigen::Vector2d g = slope;
+    if (amplitude > 0) {
+      const FastSin& fs = fastSin();
+      const double h = 0.5 * M_PI;
+      const double sx = fs(k * x + p1), cx = fs(k * x + p1 + h), sy = fs(k * y + p2),
+                   cy = fs(k * y + p2 + h), c2 = fs(k2 * (x * ca + y * sa) + p3 + h);
+      g.x() += amplitude * (0.75 * k * cx * sy + 0.25 * k2 * ca * c2);
+      g.y() += amplitude * (0.75 * k * sx * cy + 0.25 * k2 * sa * c2);
+    }
+    return g;
   }
   Eigen::Vector2d terrainGradient(double x, double y) const {
     Eigen::Vector2d g = slope;
@@ -465,31 +511,62 @@ struct LidarSimulator::Scene {
       t_hit = -f0 / f1;
       return t_hit < t_max;
     }
-    const double dxy = std::hypot(d.x(), d.y());
-    // f(t) = z(t) - h(xy(t)) changes at most this fast: a step of f / L never skips a crossing.
-    const double L = std::abs(d.z()) + gradient_bound * dxy;
-    if (d.z() - gradient_bound * dxy >= 0) return false;  // climbs faster than any hill
+    // The hills stay within ±amplitude of the mean plane: only the part of the ray inside that
+    // slab can hit, and it must hit before it leaves the slab through the bottom.
+    const double f0 = o.z() - (height + slope.x() * o.x() + slope.y() * o.y());
+    const double f1 = d.z() - (slope.x() * d.x() + slope.y() * d.y());
+    double t_begin = 0, t_end = t_max;
+    if (f0 > amplitude) {
+      if (f1 >= 0) return false;
+      t_begin = (f0 - amplitude) / -f1;
+    }
+    if (f1 < 0) t_end = std::min(t_end, (f0 + amplitude) / -f1);
+    if (t_begin >= t_end) return false;
+    // Table sines: the root moves by < 1e-5 m against exact sines, below float storage.
     auto f = [&](double t) {
       const Eigen::Vector3d p = o + t * d;
-      return p.z() - terrain(p.x(), p.y());
+      return p.z() - terrainFast(p.x(), p.y());
     };
-    double t = 0, ft = f(0);
-    if (ft <= 0) return false;
-    for (int it = 0; it < 400 && t < t_max; ++it) {
-      // Lipschitz step, at least 2% of the distance: hills are ≥ 10 m long so this cannot tunnel.
-      const double step = std::max(ft / L, 0.02 + 0.02 * t);
-      const double tn = std::min(t + step, t_max);
-      const double fn = f(tn);
-      if (fn <= 0) {
-        double a = t, b = tn;
-        for (int k = 0; k < 40 && b - a > 1e-5; ++k) {
-          const double m = 0.5 * (a + b);
-          (f(m) > 0 ? a : b) = m;
-        }
-        t_hit = 0.5 * (a + b);
+    // f changes at most L per metre of ray, so a step of f / L never skips a crossing; the
+    // minimum step (1/8 of the shorter hill wavelength) can only miss grazing clips of crests.
+    const double L = std::abs(d.z()) + gradient_bound * std::hypot(d.x(), d.y());
+    double t = t_begin, ft = f(t);
+    if (ft <= 0) {
+      if (t > 0) {
+        t_hit = t;
         return true;
       }
-      if (tn >= t_max) return false;
+      return false;  // sensor below the ground
+    }
+    for (int it = 0; it < 1000 && t < t_end; ++it) {
+      const double tn = std::min(t + std::max(ft / L, min_step), t_end);
+      const double fn = f(tn);
+      if (fn <= 0) {
+        // Illinois regula falsi on [t, tn]: f(a) > 0 >= f(b).
+        double a = t, b = tn, fa = ft, fb = fn;
+        int side = 0;
+        for (int k = 0; k < 40 && b - a > 1e-6; ++k) {
+          const double m = (a * fb - b * fa) / (fb - fa);
+          const double fm = f(m);
+          if (std::abs(fm) < 1e-7) {
+            a = b = m;
+            break;
+          }
+          if (fm > 0) {
+            a = m;
+            fa = fm;
+            if (side == 1) fb *= 0.5;
+            side = 1;
+          } else {
+            b = m;
+            fb = fm;
+            if (side == -1) fa *= 0.5;
+            side = -1;
+          }
+        }
+        t_hit = 0.5 * (a + b);
+        return t_hit < t_max;
+      }
       t = tn;
       ft = fn;
     }
@@ -517,6 +594,7 @@ LidarSimulator::LidarSimulator(const Scenario& scenario)
     const double a = r.uniform(0, M_PI);
     S.ca = std::cos(a);
     S.sa = std::sin(a);
+    S.min_step = 0.37 * T.wavelength / 8.0;
   }
   S.gradient_bound = S.slope.norm() + S.amplitude * (0.75 * S.k * std::sqrt(2.0) + 0.25 * S.k2);
   S.surface = surfaceClass(T.surface);
@@ -819,7 +897,7 @@ void LidarSimulator::simulate(int frame, pcl::PointCloud<pcl::PointXYZI>& cloud,
         best_obj = -1;
         ground = true;
         const Eigen::Vector3d p = O + tg * d_w;
-        const Eigen::Vector2d g = S.terrainGradient(p.x(), p.y());
+        const Eigen::Vector2d g = S.terrainGradientFast(p.x(), p.y());
         best_cos = std::abs(Eigen::Vector3d(-g.x(), -g.y(), 1.0).normalized().dot(d_w));
         best_cls = S.roads.at(p.x(), p.y()) ? sem::kRoad : S.surface;
         best_refl = best_cls == sem::kRoad ? 0.18f : 0.3f;

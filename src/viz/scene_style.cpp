@@ -51,11 +51,12 @@ bool parseIndex(const std::string& s, std::size_t& value) {
 }  // namespace
 
 Color trackColor(int track_id) {
-  // Hues 90°..290° (green, cyan, blue, violet) stepped by the golden angle so consecutive ids
-  // differ clearly; red/orange/yellow are reserved for movers and the selection.
+  // Hues 90°..260° (green, cyan, blue) stepped by the golden angle so consecutive ids
+  // differ clearly; red/orange/yellow are reserved for movers and the selection, magenta for
+  // ground truth.
   const double golden = 0.6180339887498949;
   const double u = std::fmod(std::abs(static_cast<double>(track_id)) * golden, 1.0);
-  const double hue = 90.0 + 200.0 * u;
+  const double hue = 90.0 + 170.0 * u;
   const double value = (track_id % 2 == 0) ? 0.95 : 0.78;
   return hsv(hue, 0.65, value);
 }

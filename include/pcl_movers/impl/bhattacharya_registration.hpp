@@ -199,19 +199,32 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::computeTransfor
   for (int i = 0; i < static_cast<int>(st.size()); ++i)
     if (st[i] > 1e-7f) nz_cells.push_back(i);
 
-  // scores[((l * wz + ez) * wx + ey) * wx + ex], e = nr - d (d = translation in cells).
-  std::vector<float> scores(static_cast<std::size_t>(layers) * wz * wx * wx, 0.f);
+  // scores[((l * wz + ez) * wx + ey) * wx + ex], e = nr - d (d = translation in cells);
+  // -1 marks a translation not evaluated.
+  std::vector<float> scores(static_cast<std::size_t>(layers) * wz * wx * wx, -1.f);
+  std::vector<std::vector<float>> layer_sqrt(static_cast<std::size_t>(layers));
   std::vector<Eigen::Vector3f> turned(points.size());
-  for (int l = 0; l < layers; ++l) {
+  auto buildLayer = [&](int l) {
     const float yaw = (l - (layers - 1) / 2) * yaw_step_;
     const Eigen::Matrix3f rz = Eigen::AngleAxisf(yaw, Eigen::Vector3f::UnitZ()).toRotationMatrix();
     for (std::size_t i = 0; i < points.size(); ++i)
       turned[i] = rz * (points[i] - centroid) + centroid;
     padded.computeFromPoints(turned, sigmas, target.getCentre());
-    const std::vector<float>& sp = padded.sqrtValues();
-    float* out = &scores[static_cast<std::size_t>(l) * wz * wx * wx];
-    // B(d) = Σ_i sqrtT[i] · sqrtP[i + nr - d]; with e = nr - d the inner loop runs forward
-    // over a contiguous row of the padded grid.
+    layer_sqrt[static_cast<std::size_t>(l)] = padded.sqrtValues();
+  };
+  // B(d) = Σ_i sqrtT[i] · sqrtP[i + nr - d] over a block of translations (all z shifts); with
+  // e = nr - d the inner loop runs forward over a contiguous row of the padded grid. Direct
+  // summation over the non-zero target cells only.
+  std::vector<float> block;
+  auto correlate = [&](int l, int ex0, int ex1, int ey0, int ey1) {
+    ex0 = std::max(ex0, 0);
+    ey0 = std::max(ey0, 0);
+    ex1 = std::min(ex1, wx - 1);
+    ey1 = std::min(ey1, wx - 1);
+    if (ex1 < ex0 || ey1 < ey0) return;
+    const int bw = ex1 - ex0 + 1, bh = ey1 - ey0 + 1;
+    block.assign(static_cast<std::size_t>(wz) * bh * bw, 0.f);
+    const std::vector<float>& sp = layer_sqrt[static_cast<std::size_t>(l)];
     for (const int cell : nz_cells) {
       const int ix = cell % nx;
       const int iy = (cell / nx) % ny;
@@ -219,33 +232,70 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::computeTransfor
       const float v = st[static_cast<std::size_t>(cell)];
       for (int ez = 0; ez < wz; ++ez) {
         const int pz = iz + ez;
-        for (int ey = 0; ey < wx; ++ey) {
+        for (int ey = ey0; ey <= ey1; ++ey) {
           const float* prow = &sp[(static_cast<std::size_t>(pz) * pny + (iy + ey)) * pnx +
-                                  static_cast<std::size_t>(ix)];
-          float* orow = out + (static_cast<std::size_t>(ez) * wx + ey) * wx;
-          for (int ex = 0; ex < wx; ++ex) orow[ex] += v * prow[ex];
+                                  static_cast<std::size_t>(ix + ex0)];
+          float* orow = &block[(static_cast<std::size_t>(ez) * bh + (ey - ey0)) * bw];
+          for (int k = 0; k < bw; ++k) orow[k] += v * prow[k];
         }
       }
     }
-  }
-
-  // ---- peak
+    for (int ez = 0; ez < wz; ++ez)
+      for (int ey = ey0; ey <= ey1; ++ey)
+        for (int ex = ex0; ex <= ex1; ++ex)
+          scores[((static_cast<std::size_t>(l) * wz + ez) * wx + ey) * wx + ex] =
+              block[(static_cast<std::size_t>(ez) * bh + (ey - ey0)) * bw + (ex - ex0)];
+  };
   auto at = [&](int l, int ez, int ey, int ex) {
     return scores[((static_cast<std::size_t>(l) * wz + ez) * wx + ey) * wx + ex];
   };
   int bl = 0, bez = 0, bey = 0, bex = 0;
   float best = -1.f;
-  for (int l = 0; l < layers; ++l)
-    for (int ez = 0; ez < wz; ++ez)
-      for (int ey = 0; ey < wx; ++ey)
-        for (int ex = 0; ex < wx; ++ex)
-          if (at(l, ez, ey, ex) > best) {
-            best = at(l, ez, ey, ex);
-            bl = l;
-            bez = ez;
-            bey = ey;
-            bex = ex;
+  auto findBest = [&]() {
+    best = -1.f;
+    for (int l = 0; l < layers; ++l)
+      for (int ez = 0; ez < wz; ++ez)
+        for (int ey = 0; ey < wx; ++ey)
+          for (int ex = 0; ex < wx; ++ex)
+            if (at(l, ez, ey, ex) > best) {
+              best = at(l, ez, ey, ex);
+              bl = l;
+              bez = ez;
+              bey = ey;
+              bex = ex;
+            }
+  };
+
+  // The whole window at the guess's yaw. The other yaw layers turn the source about its own
+  // centroid, which moves the peak little, so they are evaluated in a ±kLocal-cell block around
+  // the middle layer's peak (unless setFullYawWindow()), then grown by hill climbing until the
+  // best sample's neighbourhood is fully known. This makes yaw layers cost a fraction of a full
+  // correlation each.
+  const int mid = (layers - 1) / 2;
+  for (int l = 0; l < layers; ++l) buildLayer(l);
+  correlate(mid, 0, wx - 1, 0, wx - 1);
+  findBest();
+  constexpr int kLocal = 4;
+  for (int l = 0; l < layers; ++l) {
+    if (l == mid) continue;
+    if (full_yaw_window_)
+      correlate(l, 0, wx - 1, 0, wx - 1);
+    else
+      correlate(l, bex - kLocal, bex + kLocal, bey - kLocal, bey + kLocal);
+  }
+  findBest();
+  for (int iter = 0; iter < 4 * wx; ++iter) {
+    bool grew = false;
+    for (int l = std::max(0, bl - 1); l <= std::min(layers - 1, bl + 1); ++l)
+      for (int ey = std::max(0, bey - 1); ey <= std::min(wx - 1, bey + 1); ++ey)
+        for (int ex = std::max(0, bex - 1); ex <= std::min(wx - 1, bex + 1); ++ex)
+          if (at(l, 0, ey, ex) < 0.f) {
+            correlate(l, ex - 2, ex + 2, ey - 2, ey + 2);
+            grew = true;
           }
+    if (!grew) break;
+    findBest();
+  }
 
   // Similarity surface for callers (max over z shifts), indexed by translation d = e - nr... in
   // increasing d, i.e. ix = nr + d = 2nr - e.

@@ -10,14 +10,17 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <unordered_set>
 
 namespace pcl_movers {
 
 template <typename PointT>
 void EgoMotionEstimator<PointT>::reset() {
   keyframes_.clear();
-  map_cloud_.reset(new pcl::PointCloud<pcl::PointXYZ>);
+  map_points_.clear();
   map_normals_.clear();
+  map_grid_ = detail::PointHashGrid();
   pose_ = motion_ = keyframe_pose_ = Eigen::Isometry3d::Identity();
   frames_ = 0;
   last_fitness_ = 0.0;
@@ -55,42 +58,28 @@ void EgoMotionEstimator<PointT>::computeNormals(const std::vector<Eigen::Vector3
                                                 std::vector<Eigen::Vector3f>& normals) const {
   normals.assign(points.size(), Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN()));
   if (points.size() < 5) return;
-  pcl::PointCloud<pcl::PointXYZ>::Ptr down(new pcl::PointCloud<pcl::PointXYZ>);
-  down->reserve(points.size());
-  for (const auto& p : points) down->push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
-  // Normals by PCA over the k nearest downsampled points. Neighbours further than a few voxels
-  // away describe no local surface (isolated poles at range), so such points get no normal.
-  pcl::KdTreeFLANN<pcl::PointXYZ> tree;
-  tree.setInputCloud(down);
-  const int k = std::max(3, normal_neighbours_);
-  const float max_neighbour2 = (4.f * voxel_size_) * (4.f * voxel_size_);
-  std::vector<int> idx(k);
-  std::vector<float> d2(k);
-  for (std::size_t pi = 0; pi < down->size(); ++pi) {
-    const pcl::PointXYZ& p = (*down)[pi];
-    Eigen::Vector3f& normal = normals[pi];
-    const int found = tree.nearestKSearch(p, k, idx, d2);
+  // PCA over the neighbours within two voxels: enough for a local plane on a 0.5 m grid while
+  // staying local. Points without at least 5 neighbours (isolated poles at range) get no normal.
+  const float radius = 2.f * voxel_size_;
+  detail::PointHashGrid grid;
+  grid.build(points, radius);
+  std::vector<int> nb;
+  for (std::size_t pi = 0; pi < points.size(); ++pi) {
+    grid.radius(points[pi], radius, nb);
+    if (nb.size() < 5) continue;
     Eigen::Vector3f mean = Eigen::Vector3f::Zero();
-    int n = 0;
-    for (int i = 0; i < found; ++i)
-      if (d2[i] <= max_neighbour2) {
-        mean += (*down)[idx[i]].getVector3fMap();
-        ++n;
-      }
-    if (n >= 5) {
-      mean /= float(n);
-      Eigen::Matrix3f cov = Eigen::Matrix3f::Zero();
-      for (int i = 0; i < found; ++i)
-        if (d2[i] <= max_neighbour2) {
-          const Eigen::Vector3f q = (*down)[idx[i]].getVector3fMap() - mean;
-          cov += q * q.transpose();
-        }
-      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3f> es(cov);
-      const Eigen::Vector3f ev = es.eigenvalues();  // ascending
-      // Planar enough: the normal direction carries little of the spread; on edges and in
-      // vegetation point-to-plane distances are meaningless.
-      if (ev(2) > 0 && ev(0) < 0.1f * ev(1)) normal = es.eigenvectors().col(0);
+    for (int i : nb) mean += points[i];
+    mean /= float(nb.size());
+    Eigen::Matrix3f cov = Eigen::Matrix3f::Zero();
+    for (int i : nb) {
+      const Eigen::Vector3f q = points[i] - mean;
+      cov += q * q.transpose();
     }
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3f> es(cov);
+    const Eigen::Vector3f ev = es.eigenvalues();  // ascending
+    // Planar enough: the normal direction carries little of the spread; on edges and in
+    // vegetation point-to-plane distances are meaningless.
+    if (ev(2) > 0 && ev(0) < 0.1f * ev(1)) normals[pi] = es.eigenvectors().col(0);
   }
 }
 
@@ -106,20 +95,39 @@ void EgoMotionEstimator<PointT>::addKeyframe(const std::vector<Eigen::Vector3f>&
   kf.normals.reserve(points.size());
   for (std::size_t i = 0; i < points.size(); ++i) {
     if (!std::isfinite(normals[i].x())) continue;  // only planar points can be matched against
+    Eigen::Vector3f n = t.linear() * normals[i];
+    // Ground-like normals are made exactly vertical: the ground then fixes z, roll and pitch but
+    // has no say in x, y and yaw. A real scanner's ground carries artefacts that travel with the
+    // sensor (beam-angle calibration errors bend it into a shallow cone), and with thousands of
+    // ground points even a 0.2 deg tilt of their normals outvotes the few surfaces facing the
+    // direction of travel, pulling the estimate towards "no motion" (17 % short on KITTI
+    // odometry 00 without this).
+    if (vertical_ground_normals_ && std::abs(n.z()) > 0.95f)
+      n = Eigen::Vector3f(0.f, 0.f, n.z() > 0 ? 1.f : -1.f);
     kf.points.push_back(t * points[i]);
-    kf.normals.push_back(t.linear() * normals[i]);
+    kf.normals.push_back(n);
   }
   keyframes_.push_back(std::move(kf));
   while (static_cast<int>(keyframes_.size()) > std::max(1, local_map_size_)) keyframes_.pop_front();
   keyframe_pose_ = pose;
 
-  map_cloud_.reset(new pcl::PointCloud<pcl::PointXYZ>);
+  // The map keeps one point per voxel, newest keyframe first: overlapping keyframes would
+  // otherwise stack copies of the same surface and multiply the search cost.
+  map_points_.clear();
   map_normals_.clear();
-  for (const auto& k : keyframes_) {
-    for (const auto& p : k.points) map_cloud_->push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
-    map_normals_.insert(map_normals_.end(), k.normals.begin(), k.normals.end());
-  }
-  if (!map_cloud_->empty()) map_tree_.setInputCloud(map_cloud_);
+  std::unordered_set<std::int64_t> taken;
+  for (auto k = keyframes_.rbegin(); k != keyframes_.rend(); ++k)
+    for (std::size_t i = 0; i < k->points.size(); ++i) {
+      const Eigen::Vector3f& p = k->points[i];
+      const std::int64_t key =
+          ((static_cast<std::int64_t>(std::floor(p.x() / voxel_size_)) & 0x1FFFFF) << 42) |
+          ((static_cast<std::int64_t>(std::floor(p.y() / voxel_size_)) & 0x1FFFFF) << 21) |
+          (static_cast<std::int64_t>(std::floor(p.z() / voxel_size_)) & 0x1FFFFF);
+      if (!taken.insert(key).second) continue;
+      map_points_.push_back(p);
+      map_normals_.push_back(k->normals[i]);
+    }
+  map_grid_.build(map_points_, std::max(max_correspondence_distance_, voxel_size_));
 }
 
 template <typename PointT>
@@ -128,10 +136,8 @@ bool EgoMotionEstimator<PointT>::registerToMap(const std::vector<Eigen::Vector3f
   last_correspondences_ = 0;
   last_iterations_ = 0;
   last_fitness_ = 0.0;
-  if (map_cloud_->size() < 10 || points.size() < 10) return false;
+  if (map_points_.size() < 10 || points.size() < 10) return false;
   const int min_correspondences = 30;
-  std::vector<int> idx(1);
-  std::vector<float> d2(1);
   struct Match {
     Eigen::Vector3d p, n;
     double r;
@@ -168,14 +174,14 @@ bool EgoMotionEstimator<PointT>::registerToMap(const std::vector<Eigen::Vector3f
       kernel = kernel_scale_;
       trim = std::clamp(double(trim_ratio_), 0.05, 1.0);
     }
-    const double gate2 = gate * gate;
     matches.clear();
     for (std::size_t i = 0; i < points.size(); i += stride) {
       const Eigen::Vector3d p = pose * points[i].cast<double>();
-      const pcl::PointXYZ query(float(p.x()), float(p.y()), float(p.z()));
-      if (map_tree_.nearestKSearch(query, 1, idx, d2) < 1 || d2[0] > gate2) continue;
-      const Eigen::Vector3d q = (*map_cloud_)[idx[0]].getVector3fMap().template cast<double>();
-      const Eigen::Vector3d n = map_normals_[idx[0]].template cast<double>();
+      float d2 = 0.f;
+      const int j = map_grid_.nearest(p.cast<float>(), float(gate), d2);
+      if (j < 0) continue;
+      const Eigen::Vector3d q = map_points_[j].template cast<double>();
+      const Eigen::Vector3d n = map_normals_[j].template cast<double>();
       matches.push_back({p, n, n.dot(p - q)});
     }
     if (static_cast<int>(matches.size()) < min_correspondences) break;

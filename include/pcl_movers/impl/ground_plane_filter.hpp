@@ -139,8 +139,23 @@ void GroundPlaneFilter<PointT>::applyFilter(pcl::Indices& indices) {
   const std::size_t n = indices_->size();
 
   // Pass 1: cell of every point (-1 = not finite), counting sort into cells.
-  std::vector<int> cell_of(n);
-  std::vector<int> cell_start(num_cells + 1, 0);
+  // Ring lookup by quarter metres instead of a binary search per point; edges that fall inside
+  // a bin are resolved exactly.
+  constexpr float kBinsPerMetre = 4.f;
+  const int bins = static_cast<int>(ring_edges_.back() * kBinsPerMetre) + 1;
+  ring_lut_.resize(bins);
+  for (int b = 0; b < bins; ++b) ring_lut_[b] = ringOf(static_cast<float>(b) / kBinsPerMetre);
+  auto ringFast = [&](float r) {
+    const int b = static_cast<int>(r * kBinsPerMetre);
+    if (b >= bins) return rings - 1;
+    int ring = ring_lut_[b];
+    while (ring + 1 < rings && r >= ring_edges_[ring + 1]) ++ring;
+    return ring;
+  };
+  std::vector<int>& cell_of = cell_of_;
+  cell_of.resize(n);
+  std::vector<int>& cell_start = cell_start_;
+  cell_start.assign(num_cells + 1, 0);
   const float sector_scale = static_cast<float>(sectors) / 4.f;
   for (std::size_t k = 0; k < n; ++k) {
     const PointT& p = (*input_)[(*indices_)[k]];
@@ -150,7 +165,7 @@ void GroundPlaneFilter<PointT>::applyFilter(pcl::Indices& indices) {
     }
     const float dx = p.x - origin.x(), dy = p.y - origin.y();
     const float r = std::sqrt(dx * dx + dy * dy);
-    const int ring = ringOf(r);
+    const int ring = ringFast(r);
     const int sector =
         r > 0.f
             ? std::min(static_cast<int>(detail::diamondAngle(dx, dy) * sector_scale), sectors - 1)
@@ -160,11 +175,19 @@ void GroundPlaneFilter<PointT>::applyFilter(pcl::Indices& indices) {
     ++cell_start[cell + 1];
   }
   for (int c = 0; c < num_cells; ++c) cell_start[c + 1] += cell_start[c];
-  std::vector<int> cell_points(cell_start[num_cells]);
+  std::vector<int>& cell_points = cell_points_;
+  cell_points.resize(cell_start[num_cells]);
+  // A cell-ordered copy of the coordinates: the per-cell loops below then read memory
+  // sequentially instead of jumping around the cloud (that was the filter's main cost).
+  cell_xyz_.resize(cell_points.size());
   {
     std::vector<int> fill(cell_start.begin(), cell_start.end() - 1);
     for (std::size_t k = 0; k < n; ++k)
-      if (cell_of[k] >= 0) cell_points[fill[cell_of[k]]++] = (*indices_)[k];
+      if (cell_of[k] >= 0) {
+        const int j = fill[cell_of[k]]++;
+        cell_points[j] = (*indices_)[k];
+        cell_xyz_[j] = (*input_)[(*indices_)[k]].getVector3fMap();
+      }
   }
 
   // Pass 2: planes, ring by ring from the sensor outwards, each cell seeded by its inner neighbour.
@@ -190,6 +213,7 @@ void GroundPlaneFilter<PointT>::applyFilter(pcl::Indices& indices) {
   start.normal = Eigen::Vector3f::UnitZ();
   start.d = -(origin.z() - sensor_height_);
   pcl::Indices candidates;
+  std::vector<int> positions;  // of the candidates in cell_xyz_
 
   for (int ring = 0; ring < rings; ++ring) {
     const float centre_r = ringCentre(ring);
@@ -204,10 +228,12 @@ void GroundPlaneFilter<PointT>::applyFilter(pcl::Indices& indices) {
 
       // Only points near the prior can be this cell's ground: keeps roofs and walls out.
       candidates.clear();
-      for (int j = cell_start[cell]; j < cell_start[cell + 1]; ++j) {
-        const PointT& p = (*input_)[cell_points[j]];
-        if (std::abs(prior.height(p.getVector3fMap())) < band) candidates.push_back(cell_points[j]);
-      }
+      positions.clear();
+      for (int j = cell_start[cell]; j < cell_start[cell + 1]; ++j)
+        if (std::abs(prior.height(cell_xyz_[j])) < band) {
+          candidates.push_back(cell_points[j]);
+          positions.push_back(j);
+        }
       if (static_cast<int>(candidates.size()) < min_points_per_cell_) continue;
       const Eigen::Vector2f c2 = origin.head<2>() + centre_r * sector_dirs[s];
       Plane fitted;
@@ -218,17 +244,19 @@ void GroundPlaneFilter<PointT>::applyFilter(pcl::Indices& indices) {
         if (static_cast<int>(candidates.size()) < min_points_per_cell_) break;
         if (!fitPlane(candidates, prior, band, c2, model, ransac, fitted)) break;
         std::size_t below = 0;
-        for (const auto i : candidates)
-          below += fitted.height((*input_)[i].getVector3fMap()) < -2.f * fit_threshold_;
+        for (const auto j : positions) below += fitted.height(cell_xyz_[j]) < -2.f * fit_threshold_;
         if (below < std::max<std::size_t>(min_points_per_cell_ / 2, candidates.size() / 20)) {
           ok = true;
           break;
         }
         std::size_t kept = 0;
-        for (const auto i : candidates)
-          if (fitted.height((*input_)[i].getVector3fMap()) < -fit_threshold_)
-            candidates[kept++] = i;
+        for (std::size_t m = 0; m < positions.size(); ++m)
+          if (fitted.height(cell_xyz_[positions[m]]) < -fit_threshold_) {
+            candidates[kept] = candidates[m];
+            positions[kept++] = positions[m];
+          }
         candidates.resize(kept);
+        positions.resize(kept);
       }
       if (!ok) continue;
       cell_planes_[cell] = fitted;

@@ -82,9 +82,14 @@ void MoverTracker<PointT>::ensurePoints(const PointCloud& cloud, const pcl::Poin
                                         Candidate& candidate) const {
   if (candidate.points) return;
   candidate.points.reset(new PointCloud);
-  candidate.points->reserve(indices.indices.size());
-  for (const auto i : indices.indices) {
-    const auto& p = cloud[i];
+  // Registration cost grows with the number of points (one Gaussian each), while the density of a
+  // near object is already smooth with a few hundred: keep an even subsample.
+  const std::size_t n = indices.indices.size();
+  const std::size_t cap = static_cast<std::size_t>(std::max(1, parameters_.max_registration_points));
+  const double stride = n > cap ? static_cast<double>(n) / cap : 1.0;
+  candidate.points->reserve(std::min(n, cap));
+  for (double k = 0; k < n; k += stride) {
+    const auto& p = cloud[indices.indices[static_cast<std::size_t>(k)]];
     if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))
       candidate.points->push_back(p);
   }
@@ -189,6 +194,30 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     results_[c].features = cand.features;
   }
 
+  // Cheap frames for established static tracks (see static_refresh_frames): the track's single
+  // gated candidate has a centroid that moved as little as the (near zero) prediction says.
+  std::vector<char> cheap(tracks_.size(), 0);
+  if (use_registration && p.static_refresh_frames > 1) {
+    for (std::size_t ti = 0; ti < tracks_.size(); ++ti) {
+      const Track& track = tracks_[ti];
+      if (!track.model || track.hits < p.mover_min_age || track.mover ||
+          track.filter.speed() > 0.5 * p.mover_speed ||
+          track.since_registration + 1 >= p.static_refresh_frames)
+        continue;
+      int in_gate = 0;
+      bool still = false;
+      for (const auto& cand : candidates) {
+        if (!cand.usable) continue;
+        const double d =
+            (cand.features.centroid - track.features.centroid).template head<2>().norm();
+        if (d > p.gate_margin + p.max_gate_radius) continue;
+        ++in_gate;
+        still = d < p.static_shift;
+      }
+      cheap[ti] = in_gate == 1 && still;
+    }
+  }
+
   // 2.-3. gate and score
   std::vector<Match> matches;
   const double accel_term = 0.5 * p.acceleration_limit * dt * dt;
@@ -207,8 +236,12 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     for (std::size_t c = 0; c < candidates.size(); ++c) {
       auto& cand = candidates[c];
       if (!cand.usable) continue;
-      const bool centroid_only = !use_registration || track.large || cand.features.large ||
-                                 !track.model;
+      // Objects too low to be movers and big structures are not worth a registration.
+      const bool cand_registrable = !cand.features.large && cand.features.height >= p.min_mover_height;
+      // A track with a model is only ever updated by registration: mixing centroid measurements
+      // into its reference-point track would fake motion.
+      if (use_registration && track.model && !cand_registrable) continue;
+      const bool centroid_only = !use_registration || track.large || !track.model;
       // Big structures: their centroid moves a lot as they come into view, gate generously.
       const double margin = centroid_only && (track.large || cand.features.large)
                                 ? 0.5 * std::max(track.features.length, cand.features.length)
@@ -220,15 +253,29 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
       Match m;
       m.track = ti;
       m.cluster = c;
-      if (centroid_only) {
+      if (!centroid_only && cheap[ti]) {
+        // Established static track whose only candidate did not move: seen, no registration.
+        m.cheap = true;
+        m.measurement = Eigen::Vector3d(predicted.x(), predicted.y(), track.z);
+        m.score = track.similarity;
+        m.similarity = track.similarity;
+      } else if (centroid_only) {
         m.measurement = cand.features.centroid;
         m.score = -distance;  // below every B, so registered matches are assigned first
         m.similarity = 0;
       } else {
         ensurePoints(*cloud, clusters[c], cand);
-        if (!registerCandidate(track, cand, predicted, std::max(search, 2 * p.density_resolution),
-                               sensor_origin, m))
-          continue;
+        // A track seen once has no velocity yet: its prediction is vague and the search would
+        // have to cover every possible speed. Its centroid shift is a good enough first guess
+        // for a small search window instead.
+        Eigen::Vector2d guess = predicted;
+        double radius = std::max(search, 2 * p.density_resolution);
+        if (track.hits < 2) {
+          guess = track.history.back().template head<2>() +
+                  (cand.features.centroid - track.features.centroid).template head<2>();
+          radius = p.young_search_radius;
+        }
+        if (!registerCandidate(track, cand, guess, radius, sensor_origin, m)) continue;
       }
       matches.push_back(std::move(m));
     }
@@ -244,9 +291,26 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     if (track_used[m.track] || cluster_used[m.cluster]) continue;
     track_used[m.track] = cluster_used[m.cluster] = 1;
     Track& t = tracks_[m.track];
-    const auto& cand = candidates[m.cluster];
+    const Candidate& cand = candidates[m.cluster];
+    auto& r = results_[m.cluster];
+    if (m.cheap) {
+      t.missed = 0;
+      t.last_time = time;
+      t.features = cand.features;
+      ++t.since_registration;
+      r.track_id = t.id;
+      r.mover = t.mover;
+      r.similarity = t.similarity;
+      r.velocity = t.filter.velocity();
+      continue;
+    }
     const bool registered = m.score >= 0 && m.similarity > 0;
-    const double meas_sigma = registered ? p.registration_sigma : p.centroid_sigma;
+    t.since_registration = 0;
+    // Far objects are sampled coarsely and their densities are wide: their positions are less
+    // certain, which keeps a few noisy far measurements from producing a confident velocity.
+    const double range = (cand.features.centroid - sensor_origin).template head<2>().norm();
+    const double meas_sigma = std::max(registered ? p.registration_sigma : p.centroid_sigma,
+                                       p.measurement_sigma_per_metre * range);
     const Eigen::Vector2d v_before = t.filter.velocity();
     const double since = std::max(1e-3, time - t.last_time);
     t.filter.update(m.measurement.template head<2>(),
@@ -270,7 +334,17 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     t.similarity = m.similarity;
     t.features = cand.features;
     t.large = t.large || cand.features.large;
-    t.fast.push_back(t.filter.speed() > p.mover_speed ? 1 : 0);
+    {
+      // Fast only when the speed is above the threshold and well above its own uncertainty.
+      const Eigen::Vector2d v = t.filter.velocity();
+      const double speed = v.norm();
+      double sigma_v = 0;
+      if (speed > 0)
+        sigma_v = std::sqrt(std::max(
+            0.0, v.dot(t.filter.getCovariance().template bottomRightCorner<2, 2>() * v)) /
+                            (speed * speed));
+      t.fast.push_back(speed > p.mover_speed && speed > p.mover_speed_sigmas * sigma_v ? 1 : 0);
+    }
     while (static_cast<int>(t.fast.size()) > p.mover_window) t.fast.pop_front();
     t.history.emplace_back(m.measurement.x(), m.measurement.y(), time);
     while (static_cast<int>(t.history.size()) > p.mover_window + 1) t.history.pop_front();
@@ -281,8 +355,12 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
         // Grids always match (same parameters); keep the old model if they ever do not.
       }
     }
+    // A track born too low (e.g. half hidden) gets its model once it is seen tall enough.
+    if (use_registration && !t.model && !t.large && cand.features.height >= p.min_mover_height) {
+      ensurePoints(*cloud, clusters[m.cluster], candidates[m.cluster]);
+      t.model = makeModel(candidates[m.cluster], sensor_origin);
+    }
     decideMover(t);
-    auto& r = results_[m.cluster];
     r.track_id = t.id;
     r.mover = t.mover;
     r.similarity = t.similarity;
@@ -323,7 +401,7 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     t.large = cand.features.large;
     t.fast.push_back(0);
     t.history.emplace_back(cand.features.centroid.x(), cand.features.centroid.y(), time);
-    if (use_registration && !t.large) {
+    if (use_registration && !t.large && cand.features.height >= p.min_mover_height) {
       ensurePoints(*cloud, clusters[c], cand);
       t.model = makeModel(cand, sensor_origin);
     }

@@ -103,21 +103,26 @@ inline int RangeImageOrganizer<PointT>::rowOf(float inv_rho, float z) const {
   i = std::min(std::max(i, 0), int(row_table_.size()) - 1);
   int row = row_table_[i];
   // Each beam is the line t = tan θ_k + h_k / ρ; the lines keep their order, so the nearest one
-  // is reached by walking downhill.
+  // is reached by walking from the table's guess towards the point, only one way.
   const int n = int(tan_elevation_.size());
-  auto distance = [&](int k) { return std::abs(t - tan_elevation_[k] - offset_[k] * inv_rho); };
-  float d = distance(row);
-  while (row > 0) {
-    const float up = distance(row - 1);
-    if (!(up < d)) break;
-    d = up;
-    --row;
-  }
-  while (row < n - 1) {
-    const float down = distance(row + 1);
-    if (!(down < d)) break;
-    d = down;
-    ++row;
+  auto signed_distance = [&](int k) { return t - tan_elevation_[k] - offset_[k] * inv_rho; };
+  const float d = signed_distance(row);
+  if (d > 0.f) {  // above this beam: the nearest may be higher up (smaller rows)
+    float best = d;
+    while (row > 0) {
+      const float up = -signed_distance(row - 1);  // >= 0 once past the point
+      if (up > 0.f ? up >= best : -up >= best) break;
+      best = up > 0.f ? up : -up;
+      --row;
+    }
+  } else if (d < 0.f) {
+    float best = -d;
+    while (row < n - 1) {
+      const float down = signed_distance(row + 1);
+      if (down > 0.f ? down >= best : -down >= best) break;
+      best = down > 0.f ? down : -down;
+      ++row;
+    }
   }
   return row;
 }

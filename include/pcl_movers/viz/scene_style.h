@@ -42,13 +42,14 @@ struct SceneStyle {
   Color unassigned_high{190, 195, 205};  ///< ... to high (height shading gives depth cues)
   Color mover_points{255, 32, 16};       ///< points of a mover: strong red
   Color mover_box{255, 150, 0};          ///< box, arrow and trail of a mover: orange
-  Color ground_truth{40, 230, 90};       ///< ground-truth boxes: green
+  Color ground_truth{255, 60, 255};      ///< ground-truth boxes: magenta
   Color selected{255, 255, 60};          ///< the selected track's box: yellow
   Color text{235, 235, 235};
 };
 
-/** \brief A stable colour for a stationary track: cool hues (green-cyan-blue-violet) only, so no
- * stationary cluster can be mistaken for a mover; neighbouring ids get well separated hues. */
+/** \brief A stable colour for a stationary track: cool hues (green-cyan-blue) only, so no
+ * stationary cluster can be mistaken for a mover or for ground truth (magenta); neighbouring ids
+ * get well separated hues. */
 Color trackColor(int track_id);
 
 /** \brief What a point is, for colouring. */

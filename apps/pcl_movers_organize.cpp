@@ -1,0 +1,237 @@
+/*
+ * pcl_movers_organize — unorganized LiDAR scans (PCD or KITTI .bin) → organized range-image PCDs
+ * (RangeImageOrganizer): rows = beams top to bottom, columns = azimuth, NaN in empty cells.
+ * SPDX-License-Identifier: BSD-3-Clause
+ */
+#include <pcl_movers/io/sequence.h>
+#include <pcl_movers/range_image_organizer.h>
+#include <pcl_movers/sensor_model.h>
+
+#include <pcl/console/parse.h>
+#include <pcl/console/print.h>
+#include <pcl/io/pcd_io.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "tool_utils.h"
+
+namespace fs = std::filesystem;
+using pcl_movers::InputError;
+using Point = pcl::PointXYZI;
+using Cloud = pcl::PointCloud<Point>;
+
+namespace {
+
+/** Options and their defaults: the help text is generated from a default-constructed one. */
+struct Options {
+  std::string sensor = "auto";
+  int columns = pcl_movers::RangeImageOrganizer<Point>().getColumns();
+  float max_range = pcl_movers::RangeImageOrganizer<Point>().getMaxRange();
+  bool overwrite = false;
+};
+
+const char* kSensors = "hdl64, hdl32, vlp16, os1_64, ladar2d or auto";
+
+void printHelp(const char* argv0) {
+  const Options d;
+  std::printf(
+      "Usage: %s INPUT OUTPUT [options]\n"
+      "  Turns unorganized LiDAR scans into organized clouds (range images): one row per beam,\n"
+      "  top to bottom, one column per azimuth step, NaN where no return (pcl_movers::\n"
+      "  RangeImageOrganizer). Each point goes to the beam that best explains it, taking the\n"
+      "  lasers' vertical offsets into account; when two points share a cell the second takes a\n"
+      "  free neighbouring column, else the nearer one wins. Scans that are already organized\n"
+      "  are copied unchanged.\n\n"
+      "  INPUT is a .pcd or KITTI .bin scan, or a sequence folder (frames/*.pcd, *.pcd or\n"
+      "  velodyne/*.bin). OUTPUT is a folder that receives one <name>.pcd per scan (binary,\n"
+      "  fields of the input, VIEWPOINT kept); for a single scan it may also be a .pcd file.\n"
+      "  poses.txt, times.txt and objects.txt of a sequence folder are copied along.\n\n"
+      "Options:\n"
+      "  --sensor S      beam layout: %s (default %s;\n"
+      "                  auto estimates it from the first scan and uses it for all; hdl64 is\n"
+      "                  KITTI's calibrated HDL-64E)\n"
+      "  --columns N     azimuth columns per image (default %d = the sensor's: hdl64 2200,\n"
+      "                  hdl32/os1_64/auto 2048, vlp16 1800, ladar2d 360)\n"
+      "  --max-range M   leave out points further than M metres (default %g = no limit)\n"
+      "  --overwrite     replace an existing output file or non-empty output folder\n"
+      "  -h, --help      this help\n",
+      argv0, kSensors, d.sensor.c_str(), d.columns, double(d.max_range));
+}
+
+double parseNumber(const std::string& flag, const std::string& text) {
+  std::size_t used = 0;
+  double v = 0;
+  try {
+    v = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != text.size() || !std::isfinite(v))
+    throw InputError(flag + ": expected a number, got '" + text + "'");
+  return v;
+}
+
+/** Reads a scan and rejects what cannot be processed, naming the file and the problem. */
+Cloud::Ptr readChecked(const std::string& path) {
+  Cloud::Ptr cloud(new Cloud);
+  pcl_movers::io::readScan(path, *cloud);
+  if (cloud->empty()) throw InputError(path, 0, "the cloud is empty");
+  std::size_t finite = 0;
+  for (std::size_t i = 0; i < cloud->size(); ++i) {
+    const auto& p = (*cloud)[i];
+    if (std::isinf(p.x) || std::isinf(p.y) || std::isinf(p.z))
+      throw InputError(path, 0, "point " + std::to_string(i) + " has an infinite coordinate");
+    if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)) ++finite;
+  }
+  if (finite == 0) throw InputError(path, 0, "no finite point (all NaN)");
+  return cloud;
+}
+
+/** Files and the folder this run created, removed again if it fails: no half-written output. */
+class OutputGuard {
+ public:
+  void created(const std::string& path) { files_.push_back(path); }
+  void createdFolder(const std::string& path) { folder_ = path; }
+  void commit() { committed_ = true; }
+  ~OutputGuard() {
+    if (committed_) return;
+    std::error_code ec;
+    for (const auto& f : files_) fs::remove(f, ec);
+    if (!folder_.empty() && fs::is_empty(folder_, ec)) fs::remove(folder_, ec);
+  }
+
+ private:
+  std::vector<std::string> files_;
+  std::string folder_;
+  bool committed_ = false;
+};
+
+/** Writes a binary PCD to a temporary name, then renames it into place. */
+void writeAtomically(const std::string& path, const Cloud& cloud, OutputGuard& guard) {
+  const std::string tmp = path + ".tmp";
+  pcl::PCDWriter writer;
+  std::error_code ec;
+  if (writer.writeBinary(tmp, cloud) != 0) {
+    fs::remove(tmp, ec);
+    throw InputError(path, 0, "cannot write");
+  }
+  fs::rename(tmp, path, ec);
+  if (ec) {
+    fs::remove(tmp, ec);
+    throw InputError(path, 0, "cannot write (" + ec.message() + ")");
+  }
+  guard.created(path);
+}
+
+int run(int argc, char** argv) {
+  const std::vector<std::string> with_value = {"--sensor", "--columns", "--max-range"};
+  pcl_movers::tools::checkArguments(argc, argv, {"-h", "--help", "--overwrite"}, with_value);
+  const auto positional = pcl_movers::tools::positionalArguments(argc, argv, with_value);
+  if (positional.size() != 2)
+    throw InputError("expected INPUT and OUTPUT, got " + std::to_string(positional.size()) +
+                     " argument(s); see -h");
+  Options opt;
+  opt.overwrite = pcl::console::find_switch(argc, argv, "--overwrite");
+  std::string v;
+  if (pcl::console::parse_argument(argc, argv, "--sensor", v) >= 0) opt.sensor = v;
+  if (pcl::console::parse_argument(argc, argv, "--columns", v) >= 0) {
+    const double c = parseNumber("--columns", v);
+    if (c < 1 || c > 100000 || c != std::floor(c))
+      throw InputError("--columns: expected an integer in 1..100000, got '" + v + "'");
+    opt.columns = int(c);
+  }
+  if (pcl::console::parse_argument(argc, argv, "--max-range", v) >= 0) {
+    opt.max_range = float(parseNumber("--max-range", v));
+    if (!(opt.max_range > 0)) throw InputError("--max-range: must be > 0, got '" + v + "'");
+  }
+
+  pcl_movers::RangeImageOrganizer<Point> organizer;
+  if (opt.sensor != "auto") organizer.setSensorModel(pcl_movers::SensorModel::fromName(opt.sensor));
+  organizer.setColumns(opt.columns);
+  organizer.setMaxRange(opt.max_range);
+
+  const std::string& input = positional[0];
+  const std::string& output = positional[1];
+  const auto inputs = pcl_movers::tools::listScanInputs(input);
+  if (inputs.empty()) throw InputError(input, 0, "no scans found");
+  const bool folder_input = fs::is_directory(input);
+  const bool file_output = !folder_input && fs::path(output).extension() == ".pcd";
+
+  OutputGuard guard;
+  std::vector<std::string> outputs;
+  if (file_output) {
+    if (fs::is_directory(output)) throw InputError(output, 0, "is a folder, not a .pcd file");
+    if (fs::exists(output) && !opt.overwrite)
+      throw InputError(output, 0, "exists (use --overwrite to replace it)");
+    const fs::path parent = fs::path(output).parent_path();
+    if (!parent.empty() && !fs::is_directory(parent))
+      throw InputError(output, 0, "its folder " + parent.string() + " does not exist");
+    outputs.push_back(output);
+  } else {
+    const bool existed = fs::exists(output);
+    pcl_movers::io::prepareOutputDirectory(output, opt.overwrite);
+    if (!existed) guard.createdFolder(output);
+    for (const auto& path : inputs)
+      outputs.push_back((fs::path(output) / fs::path(path).stem()).string() + ".pcd");
+  }
+
+  std::size_t points = 0, kept = 0, displaced = 0, out_of_view = 0, invalid = 0, passed = 0;
+  pcl_movers::tools::ProgressBar bar(inputs.size());
+  for (std::size_t i = 0; i < inputs.size(); ++i) {
+    const Cloud::Ptr cloud = readChecked(inputs[i]);
+    organizer.setInputCloud(cloud);
+    Cloud image;
+    organizer.organize(image);
+    if (opt.sensor == "auto" && !organizer.wasPassThrough() && !organizer.hasSensorModel()) {
+      // One layout for the whole sequence: the first scan's. Keeps every frame the same size.
+      organizer.setSensorModel(organizer.getSensorModel());
+      pcl::console::print_info("estimated beam layout from %s: %d beams, %.2f to %.2f deg\n",
+                               inputs[i].c_str(), organizer.getSensorModel().rows(),
+                               organizer.getSensorModel().elevations().front() * 180.0 / M_PI,
+                               organizer.getSensorModel().elevations().back() * 180.0 / M_PI);
+    }
+    points += cloud->size();
+    passed += organizer.wasPassThrough();
+    displaced += organizer.getDisplacedCount();
+    out_of_view += organizer.getOutOfViewCount();
+    invalid += organizer.getInvalidCount();
+    for (const int cell : organizer.getCellOfPoint()) kept += cell >= 0;
+    writeAtomically(outputs[i], image, guard);
+    bar.update(i + 1);
+  }
+  bar.finish();
+
+  if (folder_input) {
+    // Make the output a sequence folder of its own: the other tools read these alongside.
+    for (const char* name : {"poses.txt", "times.txt", "objects.txt"}) {
+      const fs::path from = fs::path(input) / name;
+      if (!fs::exists(from)) continue;
+      const fs::path to = fs::path(output) / name;
+      std::error_code ec;
+      fs::copy_file(from, to, fs::copy_options::overwrite_existing, ec);
+      if (ec) throw InputError(to.string(), 0, "cannot copy (" + ec.message() + ")");
+      guard.created(to.string());
+    }
+  }
+  guard.commit();
+  pcl::console::print_info(
+      "%zu scan(s) (%zu already organized), %zu points: %zu in a cell of their own (%.2f %%), "
+      "%zu lost their cell to a nearer point, %zu outside the beams/range, %zu NaN -> %s\n",
+      inputs.size(), passed, points, kept, points ? 100.0 * double(kept) / double(points) : 0.0,
+      displaced, out_of_view, invalid, output.c_str());
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (pcl_movers::tools::wantsHelp(argc, argv)) {
+    printHelp(argv[0]);
+    return 0;
+  }
+  return pcl_movers::tools::runTool("pcl_movers_organize", [&] { return run(argc, argv); });
+}

@@ -1,0 +1,86 @@
+#!/usr/bin/env bash
+# Runs bench/bench_segmentation from a Release build dir and prints one Markdown section:
+# ground removal and segmentation times on organized KITTI HDL-64E frames, side by side with
+# PCL's own classes, each with its quality on the same frames.
+# Usage: scripts/bench_segmentation.sh BUILD_DIR
+set -euo pipefail
+build=${1:?usage: $0 BUILD_DIR}
+bin="$build/bench/bench_segmentation"
+if [[ ! -x "$bin" ]]; then
+  echo "bench_segmentation.sh: $bin not found (build target bench_segmentation)" >&2
+  exit 1
+fi
+json=$(mktemp)
+trap 'rm -f "$json"' EXIT
+"$bin" --benchmark_format=json --benchmark_min_time=1 --benchmark_repetitions=3 \
+  --benchmark_report_aggregates_only=true >"$json" 2>/dev/null
+python3 - "$json" <<'PY'
+import json, sys
+data = json.load(open(sys.argv[1]))
+ctx = data.get("context", {})
+rows = {}
+errors = []
+for b in data["benchmarks"]:
+    if b.get("error_occurred"):
+        errors.append(b.get("error_message", "error"))
+        continue
+    if b.get("aggregate_name") not in (None, "median"):
+        continue
+    name = b.get("run_name", b["name"]).replace("_median", "")
+    rows[name] = b
+
+print("## Ground removal and segmentation speed\n")
+if not rows:
+    print("Not run: " + (errors[0] if errors else "no benchmark results") + "\n")
+    sys.exit(0)
+print("KITTI odometry 00, frames 0-2 (real HDL-64E scans), organized by `RangeImageOrganizer` into "
+      "64 x 2048 range images; one thread; median of 3 repetitions of Google Benchmark's "
+      "CPU time per frame (`bench/bench_segmentation.cpp`, run by `scripts/bench_segmentation.sh`). "
+      "Quality columns are measured on the same frames against the SemanticKITTI labels "
+      "(points the organizer could not place are not scored). Every clusterer gets the same "
+      "input: the range image with `GroundPlaneFilter`'s ground removed.")
+load = ctx.get("load_avg")
+if load:
+    print(f"Machine: {ctx.get('num_cpus')} CPUs at {ctx.get('mhz_per_cpu')} MHz, load average "
+          f"during the run {', '.join(f'{x:.1f}' for x in load)} (a shared machine: wall "
+          f"times would be inflated, so CPU times are shown).")
+print()
+def ms(name):
+    b = rows.get(name)
+    if not b: return None
+    t = b["cpu_time"]
+    unit = b.get("time_unit", "ms")
+    return t * {"ns": 1e-6, "us": 1e-3, "ms": 1.0, "s": 1e3}[unit]
+def fmt(v): return "–" if v is None else f"{v:.2f}"
+print("| step | method | CPU ms / frame | quality on the same frames |")
+print("|---|---|---|---|")
+g = [("BM_Ground_GroundPlaneFilter", "pcl_movers::GroundPlaneFilter (local planes, polar cells)"),
+     ("BM_Ground_SACSegmentation_ExtractIndices", "pcl::SACSegmentation (one global plane, RANSAC, 0.2 m) + pcl::ExtractIndices")]
+for key, label in g:
+    b = rows.get(key)
+    if b:
+        print(f"| ground | {label} | {fmt(ms(key))} | precision {b['precision_pct']:.1f} %, recall {b['recall_pct']:.1f} % |")
+s = [("BM_Segment_RangeImageRegionGrowing", "pcl_movers::RangeImageRegionGrowing (k = 0.03, gap 2)"),
+     ("BM_Segment_RangeImageRegionGrowing_NoGap", "pcl_movers::RangeImageRegionGrowing, strict 8-neighbours (gap 0)"),
+     ("BM_Segment_EuclideanClusterExtraction", "pcl::EuclideanClusterExtraction (0.5 m, kd-tree built per frame)"),
+     ("BM_Segment_OrganizedConnectedComponents", "pcl::OrganizedConnectedComponentSegmentation + EuclideanClusterComparator (0.5 m)"),
+     ("BM_Pipeline_GroundAndRegionGrowing", "ground + segmentation (GroundPlaneFilter + RangeImageRegionGrowing)")]
+for key, label in s:
+    b = rows.get(key)
+    if b:
+        step = "both" if "Pipeline" in key else "segmentation"
+        print(f"| {step} | {label} | {fmt(ms(key))} | recovered {b['recovered_pct']:.1f} % "
+              f"(not merged {b['clean_pct']:.1f} %, over-seg. {b['over_pct']:.1f} %, "
+              f"merged {b['under_pct']:.1f} %) of {int(b['instances'])} instances |")
+print()
+rg, ec = ms("BM_Segment_RangeImageRegionGrowing"), ms("BM_Segment_EuclideanClusterExtraction")
+pipe = ms("BM_Pipeline_GroundAndRegionGrowing")
+if rg and ec:
+    print(f"- RangeImageRegionGrowing is **{ec / rg:.0f}x** faster than EuclideanClusterExtraction "
+          f"(target >= 20x at equal or better recovery: recovery "
+          f"{rows['BM_Segment_RangeImageRegionGrowing']['recovered_pct']:.1f} % vs "
+          f"{rows['BM_Segment_EuclideanClusterExtraction']['recovered_pct']:.1f} %).")
+if pipe:
+    print(f"- Ground + segmentation: **{pipe:.2f} ms** per 64 x 2048 frame (target <= 5 ms on one core): "
+          + ("met." if pipe <= 5 else "not met on this machine."))
+PY

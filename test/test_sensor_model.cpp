@@ -1,0 +1,201 @@
+/*
+ * SPDX-License-Identifier: BSD-3-Clause
+ */
+#include <pcl_movers/common.h>
+#include <pcl_movers/sensor_model.h>
+
+#include <gtest/gtest.h>
+#include <pcl/io/pcd_io.h>
+#include <pcl/point_types.h>
+
+#include <cmath>
+#include <filesystem>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace {
+
+constexpr float kDeg = float(M_PI / 180.0);
+using pcl_movers::InputError;
+using pcl_movers::SensorModel;
+
+TEST(SensorModel, PresetsHaveTheDocumentedLayout) {
+  struct Expected {
+    const char* name;
+    int rows, columns;
+    float top_deg, bottom_deg;
+  };
+  for (const Expected& e :
+       {Expected{"hdl64", 64, 2200, 1.94f, -25.0f}, Expected{"hdl32", 32, 2048, 10.67f, -30.67f},
+        Expected{"vlp16", 16, 1800, 15.f, -15.f}, Expected{"os1_64", 64, 2048, 16.6f, -16.6f},
+        Expected{"ladar2d", 60, 360, 9.75f, -19.75f}}) {
+    SCOPED_TRACE(e.name);
+    const SensorModel m = SensorModel::fromName(e.name);
+    EXPECT_EQ(m.name(), e.name);
+    EXPECT_EQ(m.rows(), e.rows);
+    EXPECT_EQ(m.columns(), e.columns);
+    EXPECT_NEAR(m.elevations().front() / kDeg, e.top_deg, 0.01);
+    EXPECT_NEAR(m.elevations().back() / kDeg, e.bottom_deg, 0.01);
+    for (int r = 0; r + 1 < m.rows(); ++r) EXPECT_GT(m.elevations()[r], m.elevations()[r + 1]);
+    EXPECT_EQ(m.verticalOffsets().size(), std::size_t(m.rows()));
+  }
+  EXPECT_TRUE(SensorModel::hdl64().isFullRevolution());
+  EXPECT_FALSE(SensorModel::ladar2d().isFullRevolution());
+  EXPECT_NEAR(SensorModel::ladar2d().azimuthMax() - SensorModel::ladar2d().azimuthMin(), 90 * kDeg,
+              1e-5);
+  // KITTI's lasers sit above the origin: upper block ~0.21 m, lower block ~0.12 m.
+  EXPECT_NEAR(SensorModel::hdl64().verticalOffsets().front(), 0.21, 0.01);
+  EXPECT_NEAR(SensorModel::hdl64().verticalOffsets().back(), 0.12, 0.01);
+}
+
+TEST(SensorModel, UnknownPresetAndBadLayoutsThrow) {
+  EXPECT_THROW(SensorModel::fromName("hdl65"), InputError);
+  EXPECT_THROW(SensorModel::fromName(""), InputError);
+  try {
+    SensorModel::fromName("velodyne");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("velodyne"), std::string::npos);
+  }
+  EXPECT_THROW(SensorModel({}, 100), InputError);
+  EXPECT_THROW(SensorModel({0.f}, 0), InputError);
+  EXPECT_THROW(SensorModel({std::nanf("")}, 10), InputError);
+  EXPECT_THROW(SensorModel({0.f}, 10, 1.f, -1.f), InputError);
+  SensorModel m({0.f, 0.1f}, 10);
+  EXPECT_THROW(m.setVerticalOffsets({0.f}), InputError);
+  EXPECT_THROW(m.setVerticalOffsets({0.f, std::nanf("")}), InputError);
+}
+
+TEST(SensorModel, ElevationsAreSortedTopToBottom) {
+  const SensorModel m({-0.1f, 0.2f, 0.05f}, 100);
+  ASSERT_EQ(m.rows(), 3);
+  EXPECT_FLOAT_EQ(m.elevations()[0], 0.2f);
+  EXPECT_FLOAT_EQ(m.elevations()[1], 0.05f);
+  EXPECT_FLOAT_EQ(m.elevations()[2], -0.1f);
+}
+
+TEST(SensorModel, RowOfPicksTheNearestBeamAndRejectsOutside) {
+  const SensorModel m = SensorModel::vlp16();  // -15..15 step 2
+  for (int r = 0; r < m.rows(); ++r) {
+    EXPECT_EQ(m.rowOf(m.elevations()[r]), r);
+    EXPECT_EQ(m.rowOf(m.elevations()[r] + 0.9f * kDeg), r);
+    EXPECT_EQ(m.rowOf(m.elevations()[r] - 0.9f * kDeg), r);
+  }
+  EXPECT_EQ(m.rowOf(15.9f * kDeg), 0);
+  EXPECT_EQ(m.rowOf(16.1f * kDeg), -1);
+  EXPECT_EQ(m.rowOf(-16.1f * kDeg), -1);
+  EXPECT_EQ(m.rowOf(std::nanf("")), -1);
+}
+
+TEST(SensorModel, ColumnOfInvertsAzimuthOfAndWraps) {
+  const SensorModel m = SensorModel::hdl64();
+  for (int c = 0; c < m.columns(); ++c) ASSERT_EQ(m.columnOf(m.azimuthOf(c)), c);
+  // Column 0 looks backwards, azimuth decreases with the column: forward is the middle.
+  EXPECT_EQ(m.columnOf(float(M_PI) - 1e-4f), 0);
+  EXPECT_EQ(m.columnOf(0.f), m.columns() / 2);
+  EXPECT_EQ(m.columnOf(-float(M_PI) + 1e-4f), m.columns() - 1);
+  EXPECT_EQ(m.columnOf(float(3 * M_PI) - 1e-4f), 0);  // wrapped
+  const SensorModel ladar = SensorModel::ladar2d();
+  EXPECT_EQ(ladar.columnOf(float(M_PI)), -1);  // behind a forward-looking sensor
+  EXPECT_EQ(ladar.columnOf(0.f), ladar.columns() / 2);
+}
+
+TEST(SensorModel, RowOfPointUsesTheVerticalOffsets) {
+  const SensorModel m = SensorModel::hdl64();
+  // Points of beam k at any range: z = ρ·tan θ_k + h_k. Near ones are degrees away from θ_k as
+  // seen from the origin, yet must land in row k.
+  int wrong_without_offsets = 0;
+  for (int k = 0; k < m.rows(); ++k)
+    for (const float rho : {2.5f, 4.f, 7.f, 15.f, 40.f, 90.f}) {
+      const float z = rho * std::tan(m.elevations()[k]) + m.verticalOffsets()[k];
+      EXPECT_EQ(m.rowOfPoint(rho, z), k) << "beam " << k << " rho " << rho;
+      wrong_without_offsets += m.rowOf(std::atan2(z, rho)) != k;
+    }
+  EXPECT_GT(wrong_without_offsets, 50);      // the offsets matter
+  EXPECT_EQ(m.rowOfPoint(10.f, 10.f), -1);   // 45° up
+  EXPECT_EQ(m.rowOfPoint(10.f, -10.f), -1);  // 45° down
+  EXPECT_EQ(m.rowOfPoint(0.f, 1.f), -1);
+}
+
+/** A synthetic scan of `model`: every beam sees walls at ranges from 3 to 60 m. */
+pcl::PointCloud<pcl::PointXYZ> syntheticScan(const SensorModel& model, unsigned seed,
+                                             int per_beam = 1500) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> azimuth(-float(M_PI), float(M_PI));
+  std::uniform_real_distribution<float> log_range(std::log(3.f), std::log(60.f));
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  for (int k = 0; k < model.rows(); ++k)
+    for (int i = 0; i < per_beam; ++i) {
+      const float a = azimuth(rng), rho = std::exp(log_range(rng));
+      cloud.push_back(
+          pcl::PointXYZ(rho * std::cos(a), rho * std::sin(a),
+                        rho * std::tan(model.elevations()[k]) + model.verticalOffsets()[k]));
+    }
+  return cloud;
+}
+
+TEST(SensorModel, EstimateRecoversIrregularBeams) {
+  // 24 unevenly spaced beams (0.4° to 1.0° apart), no offsets.
+  std::vector<float> elevations;
+  float e = 3.f;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> spacing(0.4f, 1.0f);
+  for (int k = 0; k < 24; ++k, e -= spacing(rng)) elevations.push_back(e * kDeg);
+  const SensorModel truth(elevations, 1000);
+  const auto cloud = syntheticScan(truth, 1);
+  const SensorModel estimated = SensorModel::estimate(cloud);
+  ASSERT_EQ(estimated.rows(), truth.rows());
+  EXPECT_EQ(estimated.columns(), 2048);
+  for (int k = 0; k < truth.rows(); ++k) {
+    EXPECT_NEAR(estimated.elevations()[k] / kDeg, truth.elevations()[k] / kDeg, 0.02) << k;
+    EXPECT_NEAR(estimated.verticalOffsets()[k], 0.f, 0.01) << k;
+  }
+  EXPECT_EQ(SensorModel::estimate(cloud, 24, 900).columns(), 900);
+}
+
+TEST(SensorModel, EstimateRecoversTwoBlocksWithOffsets) {
+  // The KITTI HDL-64E layout: two blocks at different heights above the origin.
+  const SensorModel truth = SensorModel::hdl64();
+  const auto cloud = syntheticScan(truth, 2, 800);
+  const SensorModel estimated = SensorModel::estimate(cloud, 64);
+  ASSERT_EQ(estimated.rows(), 64);
+  double worst = 0.0;
+  for (int k = 0; k < 64; ++k) {
+    worst =
+        std::max(worst, std::abs(double(estimated.elevations()[k] - truth.elevations()[k])) / kDeg);
+    EXPECT_NEAR(estimated.verticalOffsets()[k], truth.verticalOffsets()[k], 0.01) << k;
+  }
+  EXPECT_LT(worst, 0.02);
+}
+
+TEST(SensorModel, EstimateRejectsCloudsWithoutBeams) {
+  pcl::PointCloud<pcl::PointXYZ> empty;
+  EXPECT_THROW(SensorModel::estimate(empty), InputError);
+  pcl::PointCloud<pcl::PointXYZ> nan_cloud;
+  for (int i = 0; i < 1000; ++i)
+    nan_cloud.push_back(pcl::PointXYZ(std::nanf(""), std::nanf(""), std::nanf("")));
+  EXPECT_THROW(SensorModel::estimate(nan_cloud), InputError);
+  // More beams asked for than there are.
+  const auto cloud = syntheticScan(SensorModel::vlp16(), 3, 300);
+  EXPECT_THROW(SensorModel::estimate(cloud, 40), InputError);
+  EXPECT_EQ(SensorModel::estimate(cloud).rows(), 16);
+  EXPECT_THROW(SensorModel::estimate(cloud, -1), InputError);
+}
+
+TEST(SensorModel, EstimateOnRealKittiScanMatchesThePreset) {
+  const std::string path =
+      std::string(PCL_MOVERS_SHARED_DATA) + "/kitti-tracking-0000-a/frames/000000.pcd";
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << "KITTI data not found: " << path;
+  pcl::PointCloud<pcl::PointXYZI> cloud;
+  ASSERT_EQ(pcl::io::loadPCDFile(path, cloud), 0);
+  const SensorModel estimated = SensorModel::estimate(cloud);
+  const SensorModel preset = SensorModel::hdl64();
+  ASSERT_EQ(estimated.rows(), 64);
+  for (int k = 0; k < 64; ++k) {
+    EXPECT_NEAR(estimated.elevations()[k] / kDeg, preset.elevations()[k] / kDeg, 0.1) << k;
+    EXPECT_NEAR(estimated.verticalOffsets()[k], preset.verticalOffsets()[k], 0.03) << k;
+  }
+}
+
+}  // namespace
