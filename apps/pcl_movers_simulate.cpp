@@ -5,6 +5,7 @@
  */
 #include "tool_utils.h"
 
+#include <pcl_movers/io/sequence.h>
 #include <pcl_movers/sim/lidar_simulator.h>
 #include <pcl_movers/sim/scenario.h>
 
@@ -100,6 +101,9 @@ int main(int argc, char** argv) {
     opt.overwrite = pcl::console::find_switch(argc, argv, "--overwrite");
     opt.progress = pcl::console::find_switch(argc, argv, "--progress");
 
+    // Refuse early, before minutes of simulation (writeSequence checks again).
+    if (!opt.overwrite && !pcl_movers::io::isMissingOrEmptyDirectory(positional[1]))
+      throw InputError(positional[1], 0, "output folder exists and is not empty (use --overwrite)");
     pcl_movers::sim::Scenario scenario = pcl_movers::sim::loadScenario(positional[0]);
     if (opt.frames > 0) scenario.frames = opt.frames;
     if (opt.seed >= 0) scenario.seed = static_cast<std::uint64_t>(opt.seed);

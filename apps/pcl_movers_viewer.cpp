@@ -213,7 +213,15 @@ bool readLabelledCloud(const std::string& path, pcl::PointCloud<pcl::PointXYZI>&
   const auto* ftrack = find({"track_id", "track", "object", "instance"});
   if (!fx || (!fcls && !ftrack))
     throw InputError(path, 0, "labelled PCD needs x y z and a class or track_id field");
-  pcl::fromPCLPointCloud2(blob, cloud);  // missing intensity stays 0
+  // Through PointXYZ: labelled clouds have no intensity and PCL would warn about it.
+  pcl::PointCloud<pcl::PointXYZ> xyz;
+  pcl::fromPCLPointCloud2(blob, xyz);
+  cloud.resize(xyz.size());
+  for (std::size_t i = 0; i < xyz.size(); ++i) {
+    cloud[i].x = xyz[i].x, cloud[i].y = xyz[i].y, cloud[i].z = xyz[i].z;
+    cloud[i].intensity = 0.f;
+  }
+  cloud.width = xyz.width, cloud.height = xyz.height, cloud.is_dense = xyz.is_dense;
   auto value = [&](const pcl::PCLPointField* f, std::size_t i) -> double {
     const std::uint8_t* p = blob.data.data() + i * blob.point_step + f->offset;
     switch (f->datatype) {
@@ -484,7 +492,10 @@ class FrameRenderer {
       if (r.mover) movers.push_back(r.track_id);
     const auto colors = viz::colorPoints(cloud, labels, movers, style_colors_);
 
+    // Mover points go into a second cloud drawn with bigger points: they are what the viewer is
+    // for, and at 30 m a car has only a few dozen returns.
     pcl::PointCloud<pcl::PointXYZRGB>::Ptr coloured(new pcl::PointCloud<pcl::PointXYZRGB>);
+    pcl::PointCloud<pcl::PointXYZRGB>::Ptr mover_points(new pcl::PointCloud<pcl::PointXYZRGB>);
     coloured->reserve(cloud.size());
     std::size_t finite = 0;
     for (std::size_t k = 0; k < cloud.size(); ++k) {
@@ -493,15 +504,13 @@ class FrameRenderer {
       pcl::PointXYZRGB q;
       q.x = p.x, q.y = p.y, q.z = p.z;
       q.r = colors[k].r, q.g = colors[k].g, q.b = colors[k].b;
-      coloured->push_back(q);
+      (colors[k] == style_colors_.mover_points ? mover_points : coloured)->push_back(q);
       ++finite;
     }
     if (finite == 0) print_warn("[%s] frame %zu has no finite points\n", kTool, i);
-    pcl::visualization::PointCloudColorHandlerRGBField<pcl::PointXYZRGB> rgb(coloured);
-    if (!viewer_->updatePointCloud<pcl::PointXYZRGB>(coloured, rgb, "points"))
-      viewer_->addPointCloud<pcl::PointXYZRGB>(coloured, rgb, "points");
-    viewer_->setPointCloudRenderingProperties(pcl::visualization::PCL_VISUALIZER_POINT_SIZE,
-                                              params_.point_size, "points");
+    setCloud(coloured, "points", params_.point_size);
+    setCloud(mover_points, "movers", params_.point_size + 2.0);
+    const auto boxes = viz::fitTrackBoxes(cloud, labels, rows);
 
     // Pose of this frame: the sequence's, else fitted to the rows' sensor/world pairs.
     std::optional<Eigen::Isometry3d> pose;
@@ -513,7 +522,8 @@ class FrameRenderer {
     viz::LineSet lines, thick;
     const io::TrackRow* selected = nullptr;
     int mover_count = 0;
-    for (const auto& r : rows) {
+    for (std::size_t k = 0; k < rows.size(); ++k) {
+      const auto& r = rows[k];
       const bool is_selected = r.track_id == selected_;
       if (is_selected) selected = &r;
       if (r.mover) ++mover_count;
@@ -521,10 +531,10 @@ class FrameRenderer {
                                    : r.mover   ? style_colors_.mover_box
                                                : viz::trackColor(r.track_id);
       auto& target = (r.mover || is_selected) ? thick : lines;
-      if (r.length > 0 && r.width > 0 && r.height > 0)
-        target.addBox(viz::OrientedBox::fromTrack(r), box_color);
-      // Arrows for anything visibly moving; stationary tracks would only add clutter.
-      if (r.mover || is_selected || r.speed > 1.0) {
+      if (r.length > 0 && r.width > 0 && r.height > 0) target.addBox(boxes[k], box_color);
+      // Arrows for movers and the selection only: the filter velocities of stationary tracks are
+      // noise (a few tenths of m/s, more on walls) and would only add clutter.
+      if (r.mover || is_selected) {
         const auto arrow = viz::velocityArrow(r, sensor_to_world, params_.arrow_seconds);
         target.addArrow(arrow.first, arrow.second, box_color);
       }
@@ -637,6 +647,15 @@ class FrameRenderer {
                 static_cast<std::streamsize>(row.size()));
     }
     return static_cast<bool>(out);
+  }
+
+  void setCloud(const pcl::PointCloud<pcl::PointXYZRGB>::Ptr& cloud, const std::string& id,
+                double size) {
+    pcl::visualization::PointCloudColorHandlerRGBField<pcl::PointXYZRGB> rgb(cloud);
+    if (!viewer_->updatePointCloud<pcl::PointXYZRGB>(cloud, rgb, id))
+      viewer_->addPointCloud<pcl::PointXYZRGB>(cloud, rgb, id);
+    viewer_->setPointCloudRenderingProperties(pcl::visualization::PCL_VISUALIZER_POINT_SIZE, size,
+                                              id);
   }
 
   void setLines(vtkSmartPointer<vtkActor>& actor, const viz::LineSet& set, double width) {

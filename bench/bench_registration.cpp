@@ -58,8 +58,10 @@ pcl_movers::BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ>::Ptr makeBr(i
 
 std::vector<Method> methods() {
   std::vector<Method> m;
-  m.push_back({"Bhattacharyya, translation only",
-               "29x29x7 grid, 0.2 m cells, window +-3.2 m, 1 yaw layer", [] { return makeBr(1); }});
+  m.push_back(
+      {"Bhattacharyya, translation only",
+       "29x29x7 grid, 0.2 m cells, sigma = max(0.1 m, 0.005 range), window +-3.2 m, 1 yaw layer",
+       [] { return makeBr(1); }});
   m.push_back({"Bhattacharyya, 5 yaw layers", "as above, yaw layers -10..+10 deg step 5 deg",
                [] { return makeBr(5); }});
   m.push_back(
@@ -386,7 +388,7 @@ int report() {
     std::function<void(pcl_movers::BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ>&)> set;
   };
   const std::vector<Variant> variants = {
-      {"default: 29x29x7, 0.2 m", [](auto&) {}},
+      {"default: 29x29x7, 0.2 m, sigma 0.005 per metre", [](auto&) {}},
       {"3 vertical slices (paper's reduced resolution)", [](auto& r) { r.setVerticalSlices(3); }},
       {"1 vertical slice", [](auto& r) { r.setVerticalSlices(1); }},
       {"0.25 m cells, 25x25x7",
@@ -401,8 +403,10 @@ int report() {
        }},
       {"sigma 0.02 per metre", [](auto& r) { r.setSigmaPerMetre(0.02f); }},
       {"min sigma 0.05 m", [](auto& r) { r.setMinSigma(0.05f); }},
-      {"sigma 0.005 per metre", [](auto& r) { r.setSigmaPerMetre(0.005f); }},
+      {"sigma 0.01 per metre", [](auto& r) { r.setSigmaPerMetre(0.01f); }},
       {"sigma 0.0075 per metre", [](auto& r) { r.setSigmaPerMetre(0.0075f); }},
+      {"sigma 0.0035 per metre", [](auto& r) { r.setSigmaPerMetre(0.0035f); }},
+      {"sigma 0.0025 per metre", [](auto& r) { r.setSigmaPerMetre(0.0025f); }},
       {"7 yaw layers (-15..+15 deg)", [](auto& r) { r.setYawSamples(7); }},
       {"full window on every yaw layer", [](auto& r) { r.setFullYawWindow(true); }},
   };

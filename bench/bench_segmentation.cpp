@@ -260,6 +260,7 @@ void BM_Segment_EuclideanClusterExtraction(benchmark::State& state) {
     ec.setMinClusterSize(1);
     ec.setSearchMethod(tree);
     ec.setInputCloud(fr.non_ground_dense);
+    dense.clear();  // extract() appends to what the vector holds
     ec.extract(dense);
     // Back to organized cells (cheap, a copy of the indices).
     clusters = dense;

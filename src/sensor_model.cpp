@@ -213,8 +213,7 @@ SensorModel estimateBeams(const std::vector<float>& w, const std::vector<float>&
                      " valid points beyond 2 m; need at least 200 to find the beams");
   // Hough transform of the lines t = a + h·w: for each candidate offset h a histogram of t - h·w
   // in bins of 0.0003 (~0.017° near the horizon). A beam makes a sharp peak at its own h and
-  // smeared ones elsewhere (near points shift by h/ρ), so the best h is chosen per bin: the two
-  // blocks of an HDL-64E sit at different heights.
+  // smeared ones elsewhere (near points shift by h/ρ), so h is chosen per elevation band below.
   constexpr double kBin = 0.0003, kTMin = -1.2, kTMax = 1.2;
   const int bins = int((kTMax - kTMin) / kBin);
   // A subsample is plenty: a beam still gets hundreds of points.

@@ -151,6 +151,17 @@ TEST(BhattacharyaRegistration, RecoversYawWithLayers) {
   EXPECT_NEAR(mapped.x(), 15.f, 0.1f);
   EXPECT_NEAR(mapped.y(), 5.f, 0.1f);
   EXPECT_EQ(reg.getSimilaritySurface().yaws.size(), 5u);
+  // Evaluating every layer over the whole window finds the same optimum (the local search is
+  // only a shortcut).
+  BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ> full;
+  full.setInputSource(source);
+  full.setInputTarget(target);
+  full.setYawSamples(5);
+  full.setYawStep(5.f * kDeg);
+  full.setFullYawWindow(true);
+  full.align(out);
+  EXPECT_TRUE(full.getFinalTransformation().isApprox(t, 1e-4f));
+  EXPECT_FLOAT_EQ(full.getSimilarity(), reg.getSimilarity());
 
   // Without yaw layers the match is worse (lower B).
   BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ> flat;

@@ -214,7 +214,11 @@ TEST(RangeImageOrganizer, BadInputsThrowInputError) {
   p.z = 10.f;
   up->push_back(p);
   organizer.setInputCloud(up);
+  Cloud previous(3, 2);
+  out = previous;
   EXPECT_THROW(organizer.organize(out), InputError);
+  EXPECT_EQ(out.width, 3u);  // left as it was
+  EXPECT_EQ(out.height, 2u);
   // No model and estimation off.
   RangeImageOrganizer<pcl::PointXYZI> no_model;
   no_model.setEstimateSensorModel(false);

@@ -2,11 +2,17 @@
  * Tests of pcl_movers::RangeImageRegionGrowing on small ray-cast range images with known objects.
  * SPDX-License-Identifier: BSD-3-Clause
  */
+#include <pcl_movers/eval/segmentation_metrics.h>
+#include <pcl_movers/ground_plane_filter.h>
+#include <pcl_movers/io/ground_truth.h>
+#include <pcl_movers/io/sequence.h>
+#include <pcl_movers/range_image_organizer.h>
 #include <pcl_movers/range_image_region_growing.h>
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <limits>
 #include <vector>
 
@@ -244,4 +250,83 @@ TEST(RangeImageRegionGrowing, WorksForPointXYZI) {
   ASSERT_EQ(clusters.size(), 2u);
   EXPECT_EQ(clusters[0].indices, (pcl::Indices{0, 1, 2, 3, 4, 5}));
   EXPECT_EQ(clusters[1].indices, (pcl::Indices{6, 7}));
+}
+
+TEST(SegmentationMetrics, RecoveredOverAndUnderSegmented) {
+  // Instances 1..4 with 40 points each (instance 5 has 10: below min_points, not scored).
+  std::vector<int> instance, cluster;
+  auto add = [&](int inst, int clus, int count) {
+    for (int i = 0; i < count; ++i) {
+      instance.push_back(inst);
+      cluster.push_back(clus);
+    }
+  };
+  add(1, 0, 40);                  // 1: one clean cluster
+  add(2, 1, 20), add(2, 2, 20);   // 2: split in two -> over-segmented
+  add(3, 3, 40), add(0, 3, 100);  // 3: whole, but inside a cluster of 140 -> merged
+  add(4, -1, 36), add(4, 4, 4);   // 4: mostly removed -> missed
+  add(5, 5, 10);
+  const auto s = pcl_movers::eval::scoreObjects(instance, cluster, 30, 0.8);
+  EXPECT_EQ(s.instances, 4u);
+  EXPECT_EQ(s.recovered, 2u);  // 1 and 3
+  EXPECT_EQ(s.clean, 1u);      // 1
+  EXPECT_EQ(s.over_segmented, 1u);
+  EXPECT_EQ(s.under_segmented, 1u);
+  EXPECT_EQ(s.missed, 1u);
+}
+
+TEST(SegmentationMetrics, StuffInstancesByConnectedComponents) {
+  // Two poles 3 m apart (class 80, no instance id) and one car with instance id 7.
+  std::vector<std::uint32_t> labels;
+  std::vector<Eigen::Vector3f> points;
+  for (int i = 0; i < 20; ++i) {
+    labels.push_back(80), points.emplace_back(0.f, 0.f, 0.1f * i);
+    labels.push_back(80), points.emplace_back(3.f, 0.f, 0.1f * i);
+    labels.push_back(pcl_movers::io::makeLabel(10, 7)), points.emplace_back(10.f, 0.1f * i, 0.f);
+  }
+  const auto inst = pcl_movers::eval::instancesFromLabels(labels, points);
+  EXPECT_NE(inst[0], inst[1]);  // the two poles
+  EXPECT_EQ(inst[0], inst[3]);  // same pole
+  EXPECT_EQ(inst[2], inst[5]);  // the car
+  for (const auto i : inst) EXPECT_GT(i, 0);
+}
+
+TEST(RangeImageRegionGrowing, KittiObjectsRecovered) {
+  const std::string dir = std::string(PCL_MOVERS_SHARED_DATA) + "/kitti-odometry-00";
+  if (!std::filesystem::exists(dir + "/labels/000000.label"))
+    GTEST_SKIP() << "KITTI odometry data not found in " << dir;
+  using PointI = pcl::PointXYZI;
+  pcl::PointCloud<PointI>::Ptr scan(new pcl::PointCloud<PointI>);
+  pcl_movers::io::readScan(dir + "/velodyne/000000.bin", *scan);
+  const auto labels = pcl_movers::io::readLabels(dir + "/labels/000000.label");
+  ASSERT_EQ(labels.size(), scan->size());
+  pcl_movers::RangeImageOrganizer<PointI> organizer;
+  organizer.setSensorModel(pcl_movers::SensorModel::hdl64());
+  organizer.setInputCloud(scan);
+  pcl::PointCloud<PointI>::Ptr image(new pcl::PointCloud<PointI>);
+  organizer.organize(*image);
+  pcl_movers::GroundPlaneFilter<PointI> ground(true);
+  ground.setInputCloud(image);
+  ground.setKeepOrganized(true);
+  pcl::PointCloud<PointI>::Ptr objects(new pcl::PointCloud<PointI>);
+  ground.filter(*objects);
+  RangeImageRegionGrowing<PointI> rg;
+  rg.setInputCloud(objects);
+  std::vector<pcl::PointIndices> clusters;
+  rg.segment(clusters);
+
+  const auto& index_image = organizer.getIndexImage();
+  std::vector<int> cluster_of(scan->size(), -1);
+  std::vector<std::uint8_t> placed(scan->size(), 0);
+  for (const auto i : index_image)
+    if (i >= 0) placed[i] = 1;
+  for (std::size_t k = 0; k < clusters.size(); ++k)
+    for (const auto c : clusters[k].indices) cluster_of[index_image[c]] = static_cast<int>(k);
+  std::vector<Eigen::Vector3f> points;
+  for (const auto& p : *scan) points.push_back(p.getVector3fMap());
+  const auto score = pcl_movers::eval::scoreObjects(
+      pcl_movers::eval::instancesFromLabels(labels, points), cluster_of, 30, 0.8, &placed);
+  ASSERT_GT(score.instances, 10u);
+  // Generous bound; the evaluation command prints the exact rates.
+  EXPECT_GT(score.rate(score.recovered), 0.8);
 }

@@ -10,6 +10,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <string>
 
 using namespace pcl_movers;
@@ -173,4 +176,36 @@ TEST(Scenario, RejectsBadFilesWithFileLineKeyAndReason) {
                  {"bad.yaml:4", "duplicate key 'frames'"});
   // Missing file.
   EXPECT_THROW(loadScenario("/nonexistent/scenario.yaml"), InputError);
+}
+
+TEST(SimulateTool, RejectsBadInputWithoutWritingAnything) {
+  const std::string tool = std::string(PCL_MOVERS_BINARY_DIR) + "/apps/pcl_movers_simulate";
+  if (!std::filesystem::exists(tool)) GTEST_SKIP() << "pcl_movers_simulate not built: " << tool;
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / "pcl_movers_test_simulate_tool";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const std::string bad = (dir / "bad.yaml").string(), out = (dir / "out").string();
+  { std::ofstream(bad) << "ego:\n  start: [0, 0]\n  sped: 3\n"; }
+  auto run = [&](const std::string& args) {
+    return std::system((tool + " " + args + " > /dev/null 2>&1").c_str());
+  };
+  EXPECT_EQ(run("-h"), 0);
+  EXPECT_NE(run(bad + " " + out), 0);
+  EXPECT_NE(
+      run(std::string(PCL_MOVERS_SOURCE_DIR) + "/data/scenarios/sample.yaml " + out + " --bogus"),
+      0);
+  EXPECT_NE(run(std::string(PCL_MOVERS_SOURCE_DIR) + "/data/scenarios/sample.yaml " + out +
+                " --frames -2"),
+            0);
+  EXPECT_FALSE(std::filesystem::exists(out));
+  // A good run with a reduced sensor, then a refused rerun into the non-empty folder.
+  const std::string good = std::string(PCL_MOVERS_SOURCE_DIR) + "/data/scenarios/sample.yaml " +
+                           out + " --frames 2 --sensor vlp16";
+  EXPECT_EQ(run(good), 0);
+  EXPECT_TRUE(std::filesystem::exists(out + "/frames/000001.pcd"));
+  EXPECT_TRUE(std::filesystem::exists(out + "/labels/000001.label"));
+  EXPECT_NE(run(good), 0);
+  EXPECT_EQ(run(good + " --overwrite"), 0);
+  std::filesystem::remove_all(dir);
 }

@@ -52,6 +52,8 @@ TEST(SurfaceDensity, SingleGaussianIsCentredAndHasRangeProportionalWidth) {
   SurfaceDensity near_d(31, 31, 7, 0.1f, 0.4f), far_d(31, 31, 7, 0.1f, 0.4f);
   near_d.setMinSigma(0.01f);
   far_d.setMinSigma(0.01f);
+  near_d.setSigmaPerMetre(0.01f);
+  far_d.setSigmaPerMetre(0.01f);
   pcl::PointCloud<pcl::PointXYZ> one;
   one.push_back(pcl::PointXYZ(10.f, 0.f, 0.f));
   near_d.compute(one, Eigen::Vector3f::Zero(), Eigen::Vector3f(10.f, 0.f, 0.f));

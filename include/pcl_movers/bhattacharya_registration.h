@@ -207,7 +207,7 @@ class BhattacharyaRegistration : public pcl::Registration<PointSource, PointTarg
   float grid_height_ = 2.8f;
   int yaw_samples_ = 1;
   float yaw_step_ = 0.0872664626f;  // 5 degrees
-  float sigma_per_metre_ = 0.01f;
+  float sigma_per_metre_ = 0.005f;
   float min_sigma_ = 0.1f;
   float min_similarity_ = 0.2f;
   bool search_z_ = false;

@@ -45,7 +45,7 @@ struct DetectorParameters {
   /// Clusters with fewer points are ignored (noise, too small to track).
   int min_cluster_points = 12;
   /// Clusters further than this from the sensor are ignored [m] (too sparse to register).
-  double max_range = 60.0;
+  double max_range = 80.0;
 
   // ------------------------------------------------------------------ registration / density
   /// Density grid cell size in x/y [m] and in z [m], and grid size in cells: 29×29 like the paper,
@@ -105,7 +105,7 @@ struct DetectorParameters {
   double max_mover_length = 12.0;
   double max_mover_height = 4.5;
   /// Clusters lower than this are not movers [m] (kerbs, ground clutter).
-  double min_mover_height = 1.0;
+  double min_mover_height = 0.8;
 
   // ------------------------------------------------------------------ mover decision
   /// Speed above which a track counts as moving [m/s].

@@ -28,8 +28,8 @@ namespace pcl_movers {
  * index of each cell, getCellOfPoint() the cell of each input point.
  *
  * Bad input throws InputError from organize(): empty cloud, no finite point, no point inside the
- * sensor's field of view, no sensor model when estimation is off. NaN/Inf points are skipped and
- * counted (getInvalidCount()).
+ * sensor's field of view, no sensor model when estimation is off; `output` is then left as it was.
+ * NaN/Inf points are skipped and counted (getInvalidCount()).
  *
  * \code
  * pcl_movers::RangeImageOrganizer<pcl::PointXYZI> organizer;
@@ -121,6 +121,7 @@ class RangeImageOrganizer : public pcl::PCLBase<PointT> {
   std::vector<int> index_image_;
   std::vector<int> cell_of_point_;
   std::vector<float> cell_range_;
+  PointCloud image_;  ///< built here, then swapped into the output
   std::size_t displaced_ = 0, shifted_ = 0, invalid_ = 0, out_of_view_ = 0;
   bool pass_through_ = false;
 

@@ -454,8 +454,8 @@ struct LidarSimulator::Scene {
   double terrainFast(double x, double y) const {
     const FastSin& fs = fastSin();
     return height + slope.x() * x + slope.y() * y +
-           amplitude * (0.75 * fs(k * x + p1) * fs(k * y + p2) +
-                        0.25 * fs(k2 * (x * ca + y * sa) + p3));
+           amplitude *
+               (0.75 * fs(k * x + p1) * fs(k * y + p2) + 0.25 * fs(k2 * (x * ca + y * sa) + p3));
   }
   /** terrainGradient() with table sines (shading only). */
   Eigen::Vector2d terrainGradientFast(double x, double y) const {

@@ -349,6 +349,10 @@ template PointLabels labelPointsFromTracks<pcl::PointXYZI>(const pcl::PointCloud
                                                            const std::vector<bool>&,
                                                            const std::vector<io::TrackRow>&, double,
                                                            double);
+template std::vector<OrientedBox> fitTrackBoxes<pcl::PointXYZ>(
+    const pcl::PointCloud<pcl::PointXYZ>&, const PointLabels&, const std::vector<io::TrackRow>&);
+template std::vector<OrientedBox> fitTrackBoxes<pcl::PointXYZI>(
+    const pcl::PointCloud<pcl::PointXYZI>&, const PointLabels&, const std::vector<io::TrackRow>&);
 template std::vector<Color> colorPoints<pcl::PointXYZ>(const pcl::PointCloud<pcl::PointXYZ>&,
                                                        const PointLabels&, const std::vector<int>&,
                                                        const SceneStyle&);

@@ -138,8 +138,10 @@ int main(int argc, char** argv) {
                   std::min<std::size_t>((b + 1) * block, std::size_t(frames)), block_ms[b],
                   block_tracks[b]);
     // Throughput: the last full block against the second (the first includes warm-up).
-    const double base = block_ms.size() > 1 ? block_ms[1] : block_ms[0];
-    const double last = block_ms.size() > 2 ? block_ms[block_ms.size() - 2] : block_ms.back();
+    const bool last_full = frames % block == 0;
+    const std::size_t full_blocks = block_ms.size() - (last_full ? 0 : 1);
+    const double base = full_blocks > 1 ? block_ms[1] : block_ms[0];
+    const double last = full_blocks > 0 ? block_ms[full_blocks - 1] : block_ms.back();
     const double slowdown = base > 0 ? (last - base) / base : 0;
     std::printf("\nframes: %d, track rows: %ld (mover rows: %ld), tracks started: %d\n", frames,
                 rows, mover_rows, detector.getTracker().getTracksStarted());

@@ -236,8 +236,10 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     for (std::size_t c = 0; c < candidates.size(); ++c) {
       auto& cand = candidates[c];
       if (!cand.usable) continue;
-      // Objects too low to be movers and big structures are not worth a registration.
-      const bool cand_registrable = !cand.features.large && cand.features.height >= p.min_mover_height;
+      // Objects far too low to be movers and big structures are not worth a registration. Half
+      // the mover height is used so that a vehicle whose visible height fluctuates around
+      // min_mover_height keeps its registered track.
+      const bool cand_registrable = !cand.features.large && cand.features.height >= 0.5 * p.min_mover_height;
       // A track with a model is only ever updated by registration: mixing centroid measurements
       // into its reference-point track would fake motion.
       if (use_registration && track.model && !cand_registrable) continue;
@@ -356,9 +358,19 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
       }
     }
     // A track born too low (e.g. half hidden) gets its model once it is seen tall enough.
-    if (use_registration && !t.model && !t.large && cand.features.height >= p.min_mover_height) {
+    // Its velocity so far came from centroids of a partial view, which jump when the rest of
+    // the object appears: the registered track starts afresh (position and age are kept).
+    if (use_registration && !t.model && !t.large && cand.features.height >= 0.5 * p.min_mover_height) {
       ensurePoints(*cloud, clusters[m.cluster], candidates[m.cluster]);
       t.model = makeModel(candidates[m.cluster], sensor_origin);
+      t.filter.initialize(cand.features.centroid.template head<2>(),
+                          Eigen::Matrix2d::Identity() * meas_sigma * meas_sigma,
+                          Eigen::Vector2d::Zero(), p.initial_velocity_sigma);
+      t.z = cand.features.centroid.z();
+      t.hits = 1;
+      t.fast.assign(1, 0);
+      t.history.assign(1, Eigen::Vector3d(cand.features.centroid.x(), cand.features.centroid.y(),
+                                          time));
     }
     decideMover(t);
     r.track_id = t.id;
@@ -401,7 +413,7 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     t.large = cand.features.large;
     t.fast.push_back(0);
     t.history.emplace_back(cand.features.centroid.x(), cand.features.centroid.y(), time);
-    if (use_registration && !t.large && cand.features.height >= p.min_mover_height) {
+    if (use_registration && !t.large && cand.features.height >= 0.5 * p.min_mover_height) {
       ensurePoints(*cloud, clusters[c], cand);
       t.model = makeModel(cand, sensor_origin);
     }

@@ -115,6 +115,17 @@ PointLabels labelPointsFromTracks(const pcl::PointCloud<PointT>& cloud,
                                   const std::vector<io::TrackRow>& frame_rows, double margin = 0.3,
                                   double fallback_radius = 1.0);
 
+/** \brief The boxes to draw for the rows of a frame. tracks.csv gives a box's size and yaw but
+ * places it at the points' centroid, which lies on the visible side of an object, so a box drawn
+ * there sticks out on the far side. Where a row's points are known (labels from a labelled cloud,
+ * live detection, or points inside the grown box) the box is re-centred on the middle of their
+ * extent along the box axes, as the detector measured it, and grown to cover them; rows with
+ * fewer than 3 points keep the centroid. */
+template <typename PointT>
+std::vector<OrientedBox> fitTrackBoxes(const pcl::PointCloud<PointT>& cloud,
+                                       const PointLabels& labels,
+                                       const std::vector<io::TrackRow>& frame_rows);
+
 /** \brief Colour of every point: ground dimmed, movers red, stationary tracks by trackColor(),
  * unassigned grey shaded by height. `movers` lists the track ids that are movers in this frame. */
 template <typename PointT>

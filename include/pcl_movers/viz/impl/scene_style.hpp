@@ -118,6 +118,50 @@ PointLabels labelPointsFromTracks(const pcl::PointCloud<PointT>& cloud,
 }
 
 template <typename PointT>
+std::vector<OrientedBox> fitTrackBoxes(const pcl::PointCloud<PointT>& cloud,
+                                       const PointLabels& labels,
+                                       const std::vector<io::TrackRow>& frame_rows) {
+  std::vector<OrientedBox> boxes;
+  boxes.reserve(frame_rows.size());
+  std::unordered_map<int, std::size_t> slot;
+  for (const auto& row : frame_rows) {
+    slot[row.track_id] = boxes.size();
+    boxes.push_back(OrientedBox::fromTrack(row));
+  }
+  const std::size_t n = boxes.size();
+  const double inf = std::numeric_limits<double>::infinity();
+  std::vector<Eigen::Vector3d> lo(n, Eigen::Vector3d::Constant(inf));
+  std::vector<Eigen::Vector3d> hi(n, Eigen::Vector3d::Constant(-inf));
+  std::vector<int> count(n, 0);
+  for (std::size_t i = 0; i < cloud.size() && i < labels.track_ids.size(); ++i) {
+    const int id = labels.track_ids[i];
+    if (id < 0) continue;
+    auto it = slot.find(id);
+    if (it == slot.end()) continue;
+    const auto& p = cloud[i];
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
+    const auto& b = boxes[it->second];
+    const double c = std::cos(b.yaw), s = std::sin(b.yaw);
+    const Eigen::Vector3d local(c * p.x + s * p.y, -s * p.x + c * p.y, p.z);  // box axes
+    lo[it->second] = lo[it->second].cwiseMin(local);
+    hi[it->second] = hi[it->second].cwiseMax(local);
+    ++count[it->second];
+  }
+  for (std::size_t t = 0; t < n; ++t) {
+    if (count[t] < 3) continue;
+    auto& b = boxes[t];
+    const Eigen::Vector3d mid = 0.5 * (lo[t] + hi[t]);
+    const Eigen::Vector3d extent = hi[t] - lo[t];
+    const double c = std::cos(b.yaw), s = std::sin(b.yaw);
+    b.center = Eigen::Vector3d(c * mid.x() - s * mid.y(), s * mid.x() + c * mid.y(), mid.z());
+    b.length = std::max(b.length, extent.x());
+    b.width = std::max(b.width, extent.y());
+    b.height = std::max(b.height, extent.z());
+  }
+  return boxes;
+}
+
+template <typename PointT>
 std::vector<Color> colorPoints(const pcl::PointCloud<PointT>& cloud, const PointLabels& labels,
                                const std::vector<int>& movers, const SceneStyle& style) {
   std::vector<Color> colors(cloud.size(), style.ground);

@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Per-stage timing of the whole mover-detection pipeline (MoverDetector) on the 77 real KITTI
+# HDL-64E frames of kitti-tracking-0000-a, one core, from a Release build.
+# Usage: scripts/bench_detector.sh BUILD_DIR   — prints one Markdown section to stdout.
+set -euo pipefail
+build=${1:?usage: $0 BUILD_DIR}
+bench="$build/bench/bench_detector"
+if [[ ! -x "$bench" ]]; then
+  echo "error: $bench not found (build the bench_detector target in a Release build)" >&2
+  exit 1
+fi
+json=$(mktemp)
+trap 'rm -f "$json"' EXIT
+"$bench" --benchmark_format=json >"$json" 2>/dev/null
+python3 - "$json" <<'PY'
+import json, sys
+data = json.load(open(sys.argv[1]))
+print("## Mover detector (end to end)\n")
+print("`bench/bench_detector.cpp`: `MoverDetector<PointXYZI>` over the 77 real KITTI HDL-64E frames of")
+print("`kitti-tracking-0000-a` (~120k points each, unorganized, poses from `poses.txt`), single thread,")
+print("scans read before timing. Median milliseconds per frame of each stage; *registrations* is the")
+print("median number of Bhattacharyya registrations per frame.\n")
+stages = ["organize", "ground", "segment", "transform", "track", "total"]
+print("| mode | " + " | ".join(stages) + " | registrations |")
+print("|---|" + "---:|" * (len(stages) + 1))
+for b in data.get("benchmarks", []):
+    if b.get("error_occurred"):
+        print(f"| {b['name']} | skipped: {b.get('error_message', '')} |")
+        continue
+    mode = "registration" if "Registration" in b["name"] else "centroid"
+    cells = [f"{b.get(s + '_ms', float('nan')):.1f}" for s in stages]
+    print(f"| {mode} | " + " | ".join(cells) + f" | {b.get('registrations', 0):.0f} |")
+ctx = data.get("context", {})
+print(f"\nMachine: {ctx.get('num_cpus', '?')} CPUs at {ctx.get('mhz_per_cpu', '?')} MHz, "
+      f"library build type {ctx.get('library_build_type', '?')}; timings are wall-clock per frame.")
+PY
