@@ -35,8 +35,8 @@ namespace {
 using PointT = pcl::PointXYZI;
 using Detector = pcl_movers::MoverDetector<PointT>;
 
-const std::vector<std::string> kFlags{"-h",        "--help",          "--overwrite",
-                                      "--labelled-clouds", "--estimate-poses", "--print-config"};
+const std::vector<std::string> kFlags{
+    "-h", "--help", "--overwrite", "--labelled-clouds", "--estimate-poses", "--print-config"};
 
 std::vector<std::string> optionsWithValue() {
   std::vector<std::string> with_value{"--config", "--rate"};
@@ -48,7 +48,8 @@ void printHelp(const char* name) {
   const DetectorParameters defaults;
   std::ostringstream os;
   os << "Usage: " << name << " SEQ OUT [options]\n\n"
-     << "Detects movers (moving vehicles and people) in the LiDAR sequence folder SEQ (frames/*.pcd,\n"
+     << "Detects movers (moving vehicles and people) in the LiDAR sequence folder SEQ "
+        "(frames/*.pcd,\n"
      << "*.pcd or velodyne/*.bin; poses.txt or PCD VIEWPOINTs; times.txt) and writes to OUT:\n"
      << "  tracks.csv     one row per tracked object per frame (see DESIGN.md)\n"
      << "  summary.json   per-stage timings, counts and the parameters used\n"

@@ -34,7 +34,7 @@ struct Options {
   int iterations = 30;
   int map_size = 8;
   bool planar = false;
-  bool tilted_ground = false;
+  bool vertical_ground = false;
   std::string reference;
   std::string calib;
   bool overwrite = false;
@@ -58,8 +58,8 @@ void printHelp(const char* argv0) {
       "  --iterations N     ICP iterations per frame (default %d)\n"
       "  --map-size N       keyframes in the local map (default %d)\n"
       "  --planar           estimate x, y and yaw only\n"
-      "  --tilted-ground    keep the ground's normals as measured (default: ground normals are\n"
-      "                     made vertical, so the ground does not vote on x, y and yaw)\n"
+      "  --vertical-ground  make near-horizontal map normals exactly vertical, so the ground\n"
+      "                     fixes only z, roll and pitch (default: off)\n"
       "  --max-frames N     only the first N frames (default: all)\n"
       "  --reference FILE   reference poses (KITTI format) to report the drift against; re-based\n"
       "                     so that its first pose is the identity\n"
@@ -133,7 +133,7 @@ int run(int argc, char** argv) {
       "--voxel",      "--min-range", "--max-range",  "--max-corr",  "--trim",
       "--iterations", "--map-size",  "--max-frames", "--reference", "--calib"};
   pcl_movers::tools::checkArguments(
-      argc, argv, {"-h", "--help", "--planar", "--tilted-ground", "--overwrite"}, with_value);
+      argc, argv, {"-h", "--help", "--planar", "--vertical-ground", "--overwrite"}, with_value);
   const auto positional = pcl_movers::tools::positionalArguments(argc, argv, with_value);
   if (positional.size() != 2)
     throw InputError("expected SEQUENCE and OUT_POSES, got " + std::to_string(positional.size()) +
@@ -164,7 +164,7 @@ int run(int argc, char** argv) {
   pcl::console::parse_argument(argc, argv, "--reference", opt.reference);
   pcl::console::parse_argument(argc, argv, "--calib", opt.calib);
   opt.planar = pcl::console::find_switch(argc, argv, "--planar");
-  opt.tilted_ground = pcl::console::find_switch(argc, argv, "--tilted-ground");
+  opt.vertical_ground = pcl::console::find_switch(argc, argv, "--vertical-ground");
   opt.overwrite = pcl::console::find_switch(argc, argv, "--overwrite");
   if (!opt.calib.empty() && opt.reference.empty())
     throw InputError("--calib only applies to --reference");
@@ -206,7 +206,7 @@ int run(int argc, char** argv) {
   estimator.setMaximumIterations(opt.iterations);
   estimator.setLocalMapSize(opt.map_size);
   estimator.setPlanarMotion(opt.planar);
-  estimator.setVerticalGroundNormals(!opt.tilted_ground);
+  estimator.setVerticalGroundNormals(opt.vertical_ground);
 
   std::vector<Eigen::Isometry3d> poses;
   pcl::PointCloud<pcl::PointXYZ> scan;

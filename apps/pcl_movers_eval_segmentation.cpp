@@ -14,11 +14,13 @@
 #include <pcl/console/parse.h>
 #include <pcl/console/print.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <limits>
+#include <map>
 #include <sstream>
 
 #include "tool_utils.h"
@@ -164,6 +166,7 @@ struct Result {
   std::size_t frames = 0, points = 0, unplaced_instance_points = 0, instance_points = 0;
   pcl_movers::eval::GroundScore ground, baseline;
   pcl_movers::eval::ObjectScore objects;
+  std::map<std::uint16_t, std::size_t> false_ground;  ///< true class of points called ground
   double ground_ms = 0, organize_ms = 0, segment_ms = 0;
 };
 
@@ -201,6 +204,9 @@ void scoreFrame(const Frame& frame, const Options& opt, Result& result) {
   for (std::size_t i = 0; i < n; ++i) is_baseline[i] = (*cloud)[i].z < z0;
   const auto truth = pcl_movers::eval::groundTruthFromLabels(labels);
   result.ground += pcl_movers::eval::scoreGround(truth, is_ground);
+  for (std::size_t i = 0; i < n; ++i)
+    if (is_ground[i] && truth[i] == pcl_movers::eval::GroundTruth::kObject)
+      ++result.false_ground[pcl_movers::io::labelClass(labels[i])];
   result.baseline += pcl_movers::eval::scoreGround(truth, is_baseline);
 
   // Objects: organize (pass-through for organized scans), blank the ground, grow regions.
@@ -251,6 +257,17 @@ void scoreFrame(const Frame& frame, const Options& opt, Result& result) {
     }
   result.objects += pcl_movers::eval::scoreObjects(instance_of, cluster_of, opt.min_points,
                                                    opt.min_fraction, &placed);
+}
+
+std::string className(std::uint16_t c) {
+  static const std::map<std::uint16_t, std::string> names = {
+      {10, "car"},           {11, "bicycle"},     {18, "truck"},
+      {20, "other-vehicle"}, {30, "person"},      {31, "bicyclist"},
+      {50, "building"},      {51, "fence"},       {52, "other-structure"},
+      {70, "vegetation"},    {71, "trunk"},       {80, "pole"},
+      {81, "traffic-sign"},  {99, "other-object"}};
+  const auto it = names.find(c);
+  return it != names.end() ? it->second : "class " + std::to_string(c);
 }
 
 std::string pct(double v) {
@@ -326,7 +343,7 @@ int run(int argc, char** argv) {
   for (const auto& dir : opt.sequences) evaluate(dir, sequenceFrames(dir, opt.first, opt.last));
 
   std::printf(
-      "Ground: GroundPlaneFilter (distance %g m, tilt %g°, %d sectors) vs. a height threshold "
+      "Ground: GroundPlaneFilter (distance %g m, tilt %.1f°, %d sectors) vs. a height threshold "
       "z < %g m. Objects: ground removed, RangeImageRegionGrowing (k = %g, floor %g m, gap %d); "
       "instances with >= %d points, recovered = one cluster holds >= %g %% of them.\n\n",
       opt.distance, opt.tilt_deg, opt.sectors, -opt.sensor_height + opt.baseline, opt.k, opt.floor,
@@ -338,6 +355,21 @@ int run(int argc, char** argv) {
     std::printf("| %s | %zu | %s | %s | %s | %s |\n", r.name.c_str(), r.frames,
                 pct(r.ground.precision()).c_str(), pct(r.ground.recall()).c_str(),
                 pct(r.baseline.precision()).c_str(), pct(r.baseline.recall()).c_str());
+  std::printf("\nFalse ground (non-ground points called ground) by their true class:\n\n");
+  for (const auto& r : results) {
+    std::vector<std::pair<std::size_t, std::uint16_t>> sorted;
+    std::size_t total = 0;
+    for (const auto& [cls, count] : r.false_ground) {
+      sorted.emplace_back(count, cls);
+      total += count;
+    }
+    std::sort(sorted.rbegin(), sorted.rend());
+    std::printf("- %s:", r.name.c_str());
+    for (std::size_t k = 0; k < sorted.size() && k < 4; ++k)
+      std::printf("%s %s %.0f %%", k ? "," : "", className(sorted[k].second).c_str(),
+                  total ? 100.0 * double(sorted[k].first) / double(total) : 0.0);
+    std::printf(" (%zu points in all)\n", total);
+  }
   std::printf(
       "\n| data | instances | recovered | recovered, not merged | over-segmented | "
       "under-segmented (merged) | missed | instance points not in the range image |\n"

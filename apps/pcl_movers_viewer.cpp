@@ -841,6 +841,21 @@ int run(int argc, char** argv) {
   const viz::FrameRange range = p.frames.empty()
                                     ? viz::FrameRange{0, scene.reader.size() - 1}
                                     : viz::parseFrameRange(p.frames, scene.reader.size());
+  // Everything that can be checked without a display is checked first, so a bad input is reported
+  // as such on any machine: the first frame must be readable, the output folder usable.
+  {
+    pcl::PointCloud<pcl::PointXYZI> probe;
+    scene.reader.read(range.first, probe);
+  }
+  if (!p.screenshot_dir.empty()) {
+    std::error_code ec;
+    if (fs::exists(p.screenshot_dir, ec) && !fs::is_directory(p.screenshot_dir, ec))
+      throw InputError(p.screenshot_dir, 0, "--screenshot-dir exists and is not a folder");
+    if (!p.overwrite && !io::isMissingOrEmptyDirectory(p.screenshot_dir))
+      throw InputError(
+          p.screenshot_dir, 0,
+          "--screenshot-dir exists and is not empty (use --overwrite to write into it)");
+  }
   // VTK's X11 window aborts the process without a display; say so instead.
   if (!hasDisplay())
     throw InputError("no X display (DISPLAY is unset): run under xvfb-run for --screenshot-dir");

@@ -19,18 +19,21 @@ print("## Mover detector (end to end)\n")
 print("`bench/bench_detector.cpp`: `MoverDetector<PointXYZI>` over the 77 real KITTI HDL-64E frames of")
 print("`kitti-tracking-0000-a` (~120k points each, unorganized, poses from `poses.txt`), single thread,")
 print("scans read before timing. Median milliseconds per frame of each stage; *registrations* is the")
-print("median number of Bhattacharyya registrations per frame.\n")
+print("median number of Bhattacharyya registrations per frame; *total CPU* is the median thread CPU time")
+print("of a whole frame, which is what one core would need on an otherwise idle machine (the stage")
+print("columns are wall-clock and include waiting when other processes compete for the cores).\n")
 stages = ["organize", "ground", "segment", "transform", "track", "total"]
-print("| mode | " + " | ".join(stages) + " | registrations |")
-print("|---|" + "---:|" * (len(stages) + 1))
+print("| mode | " + " | ".join(stages) + " | total CPU | registrations |")
+print("|---|" + "---:|" * (len(stages) + 2))
 for b in data.get("benchmarks", []):
     if b.get("error_occurred"):
         print(f"| {b['name']} | skipped: {b.get('error_message', '')} |")
         continue
     mode = "registration" if "Registration" in b["name"] else "centroid"
     cells = [f"{b.get(s + '_ms', float('nan')):.1f}" for s in stages]
-    print(f"| {mode} | " + " | ".join(cells) + f" | {b.get('registrations', 0):.0f} |")
+    print(f"| {mode} | " + " | ".join(cells) +
+          f" | {b.get('total_cpu_ms', float('nan')):.1f} | {b.get('registrations', 0):.0f} |")
 ctx = data.get("context", {})
 print(f"\nMachine: {ctx.get('num_cpus', '?')} CPUs at {ctx.get('mhz_per_cpu', '?')} MHz, "
-      f"library build type {ctx.get('library_build_type', '?')}; timings are wall-clock per frame.")
+      f"Google Benchmark library build type {ctx.get('library_build_type', '?')}; timings are wall-clock per frame.")
 PY

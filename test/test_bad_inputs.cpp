@@ -19,6 +19,7 @@
  *
  * SPDX-License-Identifier: BSD-3-Clause
  */
+#include <pcl_movers/ground_plane_filter.h>
 #include <pcl_movers/io/sequence.h>
 #include <pcl_movers/io/tracks.h>
 #include <pcl_movers/sim/lidar_simulator.h>
@@ -246,7 +247,8 @@ class BadInputs : public ::testing::Test {
     // Scenario files for the simulator.
     writeFile(d + "empty.yaml", "");
     writeFile(d + "garbage.yaml", std::string("\x7f\x45\x4c\x46\x02\x01\x01\0\0\0", 10));
-    writeFile(d + "unknown_key.yaml", "frames: 2\nsensor: {preset: vlp16}\nego: {start: [0, 0], speed: 1}\nwheels: 4\n");
+    writeFile(d + "unknown_key.yaml",
+              "frames: 2\nsensor: {preset: vlp16}\nego: {start: [0, 0], speed: 1}\nwheels: 4\n");
     writeFile(d + "negative.yaml",
               "frames: 2\nsensor: {preset: vlp16}\nstatics:\n"
               "  - {type: wall, position: [5, 0], size: [-3, 0.3, 2]}\n");
@@ -280,8 +282,11 @@ class BadInputs : public ::testing::Test {
   static std::string in(const std::string& name) { return dir_ + "/in/" + name; }
   static std::string out(const std::string& name) { return dir_ + "/out/" + name; }
 
+  /** Tools come from this build; PCL_MOVERS_TOOLS_DIR overrides (an installed suite, or another
+   * build dir) so the matrix can be run against any set of binaries. */
   static std::string toolPath(const std::string& tool) {
-    return std::string(PCL_MOVERS_BINARY_DIR) + "/apps/pcl_movers_" + tool;
+    const char* dir = std::getenv("PCL_MOVERS_TOOLS_DIR");
+    return std::string(dir && *dir ? dir : PCL_MOVERS_BINARY_DIR "/apps") + "/pcl_movers_" + tool;
   }
   static bool toolBuilt(const std::string& tool) {
     return access(toolPath(tool).c_str(), X_OK) == 0;
@@ -374,8 +379,10 @@ class BadInputs : public ::testing::Test {
       keys.push_back(fs::path(input).filename().string());
       rows.push_back({name, quote(input) + " " + quote(dst), e, keys, dst});
     };
-    const std::vector<std::string> invalid{"no finite", "no valid",  "nan",  "finite",
-                                           "invalid",   "no points", "empty"};
+    // "valid points": the organizer's beam-layout estimate needs a few hundred points.
+    const std::vector<std::string> invalid{"no finite", "no valid",     "nan",
+                                           "finite",    "invalid",      "no points",
+                                           "empty",     "valid points", "infinite"};
     row("good sequence (control)", in("seq_good"), Expect::kPass, {});
     row("missing input", in("does_not_exist"), Expect::kFail,
         {"does not exist", "no such", "not found", "cannot open"});
@@ -454,12 +461,9 @@ class BadInputs : public ::testing::Test {
 std::string BadInputs::dir_;
 std::string BadInputs::good_frame_;
 
-#define SKIP_UNLESS_BUILT(tool)                             \
-  if (!toolBuilt(tool))                                     \
-  GTEST_SKIP() << "pcl_movers_" << tool                     \
-               << " is not built in " PCL_MOVERS_BINARY_DIR \
-                  "/apps; "                                 \
-                  "build it to run its bad-input rows"
+#define SKIP_UNLESS_BUILT(tool) \
+  if (!toolBuilt(tool))         \
+  GTEST_SKIP() << toolPath(tool) << " is not built; build it to run its bad-input rows"
 
 TEST_F(BadInputs, HelpIsNotAnError) {
   int checked = 0;
@@ -506,6 +510,27 @@ TEST_F(BadInputs, DetectIsDeterministic) {
   }
   EXPECT_GT(std::count(tracks[0].begin(), tracks[0].end(), '\n'), 1) << "no track rows at all";
   EXPECT_EQ(tracks[0], tracks[1]);
+}
+
+// Regression (found by this matrix, also in test/fuzz/corpus_pcd/regression_huge_coordinates.pcd):
+// coordinates near FLT_MAX overflow r = sqrt(x² + y²) to inf; GroundPlaneFilter then cast inf to
+// int for its ring lookup and indexed far outside its table (SIGSEGV in pcl_movers_ground and
+// pcl_movers_segment). Such points are finite, so they must simply fall in the outermost ring.
+TEST(BadInputsInProcess, GroundPlaneFilterSurvivesHugeCoordinates) {
+  auto cloud = pcl::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
+  for (int k = 0; k < 200; ++k)  // a patch of ground, so the filter has work to do
+    cloud->push_back(
+        pcl::PointXYZ(4.f + 0.1f * float(k % 20), -1.f + 0.2f * float(k / 20), -1.73f));
+  cloud->push_back(pcl::PointXYZ(3e37f, 3e37f, -1e35f));
+  cloud->push_back(pcl::PointXYZ(-3e37f, 3e37f, 0.f));
+  cloud->push_back(pcl::PointXYZ(1e30f, -2e30f, 1e30f));
+  pcl_movers::GroundPlaneFilter<pcl::PointXYZ> filter;
+  filter.setInputCloud(cloud);
+  pcl::Indices non_ground;
+  filter.filter(non_ground);
+  // Still a working filter: the patch is (mostly) ground, the three huge points are not.
+  EXPECT_GE(non_ground.size(), 3u);
+  EXPECT_LT(non_ground.size(), cloud->size());
 }
 
 TEST_F(BadInputs, Ground) {

@@ -21,8 +21,8 @@ struct SceneBuilder {
   std::vector<pcl::PointIndices> clusters;
   std::mt19937 rng{42};
 
-  void addBox(const Eigen::Vector3d& sensor, const Eigen::Vector2d& centre, double yaw, double length,
-              double width, double height) {
+  void addBox(const Eigen::Vector3d& sensor, const Eigen::Vector2d& centre, double yaw,
+              double length, double width, double height) {
     std::normal_distribution<double> noise(0.0, 0.02);
     pcl::PointIndices cluster;
     const double range = (centre - sensor.head<2>()).norm();
@@ -63,7 +63,9 @@ struct SceneBuilder {
   }
 };
 
-pcl_movers::DetectorParameters defaults() { return pcl_movers::DetectorParameters(); }
+pcl_movers::DetectorParameters defaults() {
+  return pcl_movers::DetectorParameters();
+}
 
 /** Runs one frame and returns the cluster results. */
 std::vector<Tracker::ClusterResult> step(Tracker& tracker, SceneBuilder& scene,

@@ -321,6 +321,38 @@ TEST(SceneStyle, PointsInsideTrackBoxesTakeTheTrack) {
   for (auto c : labels3.classes) EXPECT_NE(c, viz::PointClass::Mover);
 }
 
+TEST(SceneStyle, TrackBoxesCentredOnTheirPoints) {
+  // Only the near face (x = 10) of a 4 m x 2 m car seen from the origin, yaw 0: the centroid is on
+  // the face, the box must cover the points, not stick out 1 m in front of them.
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  viz::PointLabels labels;
+  for (int i = 0; i <= 40; ++i)  // integer steps: the extent must be exactly 4 m x 1.5 m
+    for (int k = 0; k <= 15; ++k) {
+      cloud.push_back({10.f, float(-2.0 + 0.1 * i), float(-1.5 + 0.1 * k)});
+      labels.classes.push_back(viz::PointClass::Mover);
+      labels.track_ids.push_back(6);
+    }
+  io::TrackRow row;
+  row.track_id = 6, row.x = 10, row.y = 0, row.z = -0.75;
+  row.length = 4.2, row.width = 0.3, row.height = 1.5, row.yaw = M_PI / 2;  // long side along y
+  io::TrackRow lonely = row;
+  lonely.track_id = 8, lonely.x = 20;  // no points: keeps its centroid
+  const auto boxes = viz::fitTrackBoxes(cloud, labels, {row, lonely});
+  ASSERT_EQ(boxes.size(), 2u);
+  EXPECT_NEAR(boxes[0].center.x(), 10.0, 1e-5);
+  EXPECT_NEAR(boxes[0].center.y(), 0.0, 1e-5);
+  EXPECT_NEAR(boxes[0].center.z(), -0.75, 1e-5);
+  EXPECT_NEAR(boxes[0].length, 4.2, 1e-9);  // the CSV size is kept when it covers the points
+  for (const auto& p : cloud)
+    EXPECT_TRUE(boxes[0].contains(p.getVector3fMap().cast<double>(), 1e-4));
+  // A box given too small grows to its points; one given off-centre moves onto them.
+  row.length = 1.0, row.y = 1.5;
+  const auto grown = viz::fitTrackBoxes(cloud, labels, {row});
+  EXPECT_NEAR(grown[0].length, 4.0, 0.05);
+  EXPECT_NEAR(grown[0].center.y(), 0.0, 0.05);
+  EXPECT_EQ(boxes[1].center, Eigen::Vector3d(20, 0, -0.75));
+}
+
 TEST(SceneStyle, ParseFrameRange) {
   auto r = viz::parseFrameRange("2:5", 10);
   EXPECT_EQ(r.first, 2u);

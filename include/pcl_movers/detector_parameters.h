@@ -49,8 +49,8 @@ struct DetectorParameters {
 
   // ------------------------------------------------------------------ registration / density
   /// Density grid cell size in x/y [m] and in z [m], and grid size in cells: 29×29 like the paper,
-  /// but 3 slices of 0.94 m instead of 7 — the paper's own speed-up ("reducing vertical resolution to
-  /// three slices gave a good speedup while maintaining good robustness").
+  /// but 3 slices of 0.94 m instead of 7 — the paper's own speed-up ("reducing vertical resolution
+  /// to three slices gave a good speedup while maintaining good robustness").
   double density_resolution = 0.2;
   double density_resolution_z = 0.94;
   int density_cells_xy = 29;
@@ -171,10 +171,12 @@ void DetectorParameters::forEachParameter(F&& f) {
   f("model_half_life", model_half_life, "half-life of the accumulated model [frames]");
   f("mode", mode, "association: registration or centroid");
   f("acceleration_noise", acceleration_noise, "Kalman white-noise acceleration sigma [m/s^2]");
-  f("acceleration_limit", acceleration_limit, "updates implying more acceleration are rejected [m/s^2]");
+  f("acceleration_limit", acceleration_limit,
+    "updates implying more acceleration are rejected [m/s^2]");
   f("registration_sigma", registration_sigma, "sigma of a registered position [m]");
   f("centroid_sigma", centroid_sigma, "sigma of a centroid position [m]");
-  f("measurement_sigma_per_metre", measurement_sigma_per_metre, "position sigma per metre of range");
+  f("measurement_sigma_per_metre", measurement_sigma_per_metre,
+    "position sigma per metre of range");
   f("static_refresh_frames", static_refresh_frames, "register still static tracks every N frames");
   f("static_shift", static_shift, "max centroid shift of a still static track [m]");
   f("initial_velocity_sigma", initial_velocity_sigma, "velocity sigma of a new track [m/s]");
@@ -227,11 +229,21 @@ inline std::string formatValue(double v) {
   os << v;
   return os.str();
 }
-inline std::string formatValue(int v) { return std::to_string(v); }
-inline std::string formatValue(const std::string& v) { return v; }
-inline std::string jsonValue(double v) { return formatValue(v); }
-inline std::string jsonValue(int v) { return formatValue(v); }
-inline std::string jsonValue(const std::string& v) { return "\"" + v + "\""; }
+inline std::string formatValue(int v) {
+  return std::to_string(v);
+}
+inline std::string formatValue(const std::string& v) {
+  return v;
+}
+inline std::string jsonValue(double v) {
+  return formatValue(v);
+}
+inline std::string jsonValue(int v) {
+  return formatValue(v);
+}
+inline std::string jsonValue(const std::string& v) {
+  return "\"" + v + "\"";
+}
 }  // namespace detail
 
 inline void DetectorParameters::set(const std::string& key, const std::string& value,

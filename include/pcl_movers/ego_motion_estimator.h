@@ -187,7 +187,8 @@ class EgoMotionEstimator {
   bool getConstantVelocity() const { return constant_velocity_; }
 
   /** \brief Treat map normals within ~18 deg of vertical as exactly vertical, so that the
-   * ground constrains only z, roll and pitch (default true). */
+   * ground constrains only z, roll and pitch (default false: on rolling terrain the sloping
+   * ground is what fixes x and y). */
   void setVerticalGroundNormals(bool enabled) { vertical_ground_normals_ = enabled; }
   bool getVerticalGroundNormals() const { return vertical_ground_normals_; }
 
@@ -238,7 +239,7 @@ class EgoMotionEstimator {
   bool planar_motion_ = false;
   bool constant_velocity_ = true;
   int normal_neighbours_ = 10;
-  bool vertical_ground_normals_ = true;
+  bool vertical_ground_normals_ = false;
 
   std::deque<Keyframe> keyframes_;
   std::vector<Eigen::Vector3f> map_points_;   ///< world frame, one per voxel

@@ -9,11 +9,11 @@ namespace pcl_movers {
 
 /** \brief Constant-velocity Kalman filter in the horizontal plane.
  *
- * State `[x, y, vx, vy]` (world frame, metres and m/s), measurement `[x, y]`. The process noise is the
- * discrete white-noise-acceleration model: per axis
- * `Q = σa² · [dt⁴/4, dt³/2; dt³/2, dt²]`, so `σa` (setAccelerationNoise) is the standard deviation of
- * the unmodelled acceleration in m/s². The height of an object is taken from the measurement directly
- * by the tracker: vehicles and people move on the ground, so a vertical state would only add noise.
+ * State `[x, y, vx, vy]` (world frame, metres and m/s), measurement `[x, y]`. The process noise is
+ * the discrete white-noise-acceleration model: per axis `Q = σa² · [dt⁴/4, dt³/2; dt³/2, dt²]`, so
+ * `σa` (setAccelerationNoise) is the standard deviation of the unmodelled acceleration in m/s². The
+ * height of an object is taken from the measurement directly by the tracker: vehicles and people
+ * move on the ground, so a vertical state would only add noise.
  */
 class KalmanFilterCV {
  public:

@@ -21,9 +21,9 @@ namespace pcl_movers {
 /** \brief Tracks every object cluster of a LiDAR sequence and decides which are movers
  * (Morris et al., section 6).
  *
- * Each frame, update() receives the clusters of one scan in the **world** frame. Every track (static
- * objects too) carries a constant-velocity KalmanFilterCV on its horizontal position and, in the
- * default registration mode, an accumulated SurfaceDensity model:
+ * Each frame, update() receives the clusters of one scan in the **world** frame. Every track
+ * (static objects too) carries a constant-velocity KalmanFilterCV on its horizontal position and,
+ * in the default registration mode, an accumulated SurfaceDensity model:
  *
  *  1. predict all tracks to the frame time;
  *  2. gate: a cluster is a candidate of a track when its centroid lies within
@@ -43,8 +43,8 @@ namespace pcl_movers {
  *     deviation, so young or far tracks with vague velocities wait) in `mover_votes` of the last
  *     `mover_window` updates,
  *     at least `mover_min_age` updates, and the net displacement of the measurements over the
- *     window at least `displacement_ratio`·`mover_speed`·elapsed time (a filter velocity inflated by
- *     a few noisy measurements does not survive this check).
+ *     window at least `displacement_ratio`·`mover_speed`·elapsed time (a filter velocity inflated
+ * by a few noisy measurements does not survive this check).
  *
  * The registered measurement is the track's reference point: the model grid is centred where the
  * object was first seen and the registration maps each new view onto it, so the measured position
@@ -59,10 +59,10 @@ namespace pcl_movers {
  * as in the paper.
  *
  * Practical limits (documented design choices): clusters longer than `max_mover_length` or taller
- * than `max_mover_height` (buildings, walls, hedges, tree rows) are tracked by centroid only and are
- * never movers — registering them would be expensive and their centroids move with the view;
- * clusters lower than `min_mover_height` are never movers. Tracks and models are bounded: each track
- * owns one fixed-size grid, tracks die after `max_missed_frames` and their number is capped.
+ * than `max_mover_height` (buildings, walls, hedges, tree rows) are tracked by centroid only and
+ * are never movers — registering them would be expensive and their centroids move with the view;
+ * clusters lower than `min_mover_height` are never movers. Tracks and models are bounded: each
+ * track owns one fixed-size grid, tracks die after `max_missed_frames` and their number is capped.
  */
 template <typename PointT>
 class MoverTracker {
@@ -87,18 +87,18 @@ class MoverTracker {
   struct Track {
     int id = 0;
     KalmanFilterCV filter;
-    double z = 0;                ///< height of the reference point (from the last measurement)
-    double last_time = 0;        ///< time of the last update
-    int hits = 0;                ///< updates so far
-    int age = 0;                 ///< frames since birth
-    int missed = 0;              ///< consecutive frames without update
-    bool mover = false;          ///< mover decision after the last update
-    bool large = false;          ///< static structure tracked by centroid
-    double similarity = 0;       ///< B of the last update (0 in centroid mode / at birth)
-    ClusterFeatures features;    ///< geometry of the last cluster assigned
-    std::deque<char> fast;       ///< speed > mover_speed after each of the last updates
+    double z = 0;              ///< height of the reference point (from the last measurement)
+    double last_time = 0;      ///< time of the last update
+    int hits = 0;              ///< updates so far
+    int age = 0;               ///< frames since birth
+    int missed = 0;            ///< consecutive frames without update
+    bool mover = false;        ///< mover decision after the last update
+    bool large = false;        ///< static structure tracked by centroid
+    double similarity = 0;     ///< B of the last update (0 in centroid mode / at birth)
+    ClusterFeatures features;  ///< geometry of the last cluster assigned
+    std::deque<char> fast;     ///< speed > mover_speed after each of the last updates
     std::deque<Eigen::Vector3d> history;  ///< (x, y, time) of the last measurements
-    SurfaceDensity::Ptr model;   ///< accumulated surface density (registration mode)
+    SurfaceDensity::Ptr model;            ///< accumulated surface density (registration mode)
     int since_registration = 0;  ///< cheap (unregistered) frames since the last registration
   };
 
@@ -118,10 +118,9 @@ class MoverTracker {
   const DetectorParameters& getParameters() const { return parameters_; }
 
   /** \brief Processes one frame.
-   * \param cloud points in the world frame (may be organized with NaN; only cluster points are read)
-   * \param clusters point indices of each object cluster
-   * \param sensor_origin sensor position in the world frame (ranges → density σ)
-   * \param time frame time [s], increasing */
+   * \param cloud points in the world frame (may be organized with NaN; only cluster points are
+   * read) \param clusters point indices of each object cluster \param sensor_origin sensor position
+   * in the world frame (ranges → density σ) \param time frame time [s], increasing */
   void update(const PointCloudConstPtr& cloud, const std::vector<pcl::PointIndices>& clusters,
               const Eigen::Vector3d& sensor_origin, double time);
 

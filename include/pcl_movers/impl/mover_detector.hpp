@@ -20,8 +20,8 @@ namespace pcl_movers {
 
 template <typename PointT>
 const std::vector<std::string>& MoverDetector<PointT>::stageNames() {
-  static const std::vector<std::string> names{"organize", "ground",    "segment",
-                                              "transform", "track",    "total"};
+  static const std::vector<std::string> names{"organize",  "ground", "segment",
+                                              "transform", "track",  "total"};
   return names;
 }
 
@@ -196,8 +196,8 @@ void MoverDetector<PointT>::process(const PointCloudConstPtr& scan, const Eigen:
     result.cluster_indices.push_back(clusters[c]);
   }
 
-  timings_ = {{"organize", ms(t0, t1)}, {"ground", ms(t1, t2)},   {"segment", ms(t2, t3)},
-              {"transform", ms(t3, t4)}, {"track", ms(t4, t5)}, {"total", ms(t0, t5)}};
+  timings_ = {{"organize", ms(t0, t1)},  {"ground", ms(t1, t2)}, {"segment", ms(t2, t3)},
+              {"transform", ms(t3, t4)}, {"track", ms(t4, t5)},  {"total", ms(t0, t5)}};
 }
 
 }  // namespace pcl_movers

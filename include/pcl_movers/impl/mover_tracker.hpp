@@ -85,7 +85,8 @@ void MoverTracker<PointT>::ensurePoints(const PointCloud& cloud, const pcl::Poin
   // Registration cost grows with the number of points (one Gaussian each), while the density of a
   // near object is already smooth with a few hundred: keep an even subsample.
   const std::size_t n = indices.indices.size();
-  const std::size_t cap = static_cast<std::size_t>(std::max(1, parameters_.max_registration_points));
+  const std::size_t cap =
+      static_cast<std::size_t>(std::max(1, parameters_.max_registration_points));
   const double stride = n > cap ? static_cast<double>(n) / cap : 1.0;
   candidate.points->reserve(std::min(n, cap));
   for (double k = 0; k < n; k += stride) {
@@ -111,8 +112,7 @@ SurfaceDensity::Ptr MoverTracker<PointT>::makeModel(const Candidate& candidate,
 
 template <typename PointT>
 bool MoverTracker<PointT>::registerCandidate(const Track& track, Candidate& candidate,
-                                             const Eigen::Vector2d& predicted,
-                                             double search_radius,
+                                             const Eigen::Vector2d& predicted, double search_radius,
                                              const Eigen::Vector3d& sensor_origin, Match& match) {
   const auto& p = parameters_;
   ++registrations_;
@@ -187,7 +187,8 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
   for (std::size_t c = 0; c < clusters.size(); ++c) {
     auto& cand = candidates[c];
     cand.features = computeFeatures(*cloud, clusters[c].indices);
-    const double range = (cand.features.centroid.template head<2>() - sensor_origin.template head<2>()).norm();
+    const double range =
+        (cand.features.centroid.template head<2>() - sensor_origin.template head<2>()).norm();
     cand.usable = cand.features.points >= p.min_cluster_points && range <= p.max_range;
     cand.features.large =
         cand.features.length > p.max_mover_length || cand.features.height > p.max_mover_height;
@@ -210,7 +211,8 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
         if (!cand.usable) continue;
         const double d =
             (cand.features.centroid - track.features.centroid).template head<2>().norm();
-        if (d > p.gate_margin + p.max_gate_radius) continue;
+        // Another cluster this close would make the association ambiguous: register then.
+        if (d > 2 * p.gate_margin) continue;
         ++in_gate;
         still = d < p.static_shift;
       }
@@ -224,14 +226,14 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
   for (std::size_t ti = 0; ti < tracks_.size(); ++ti) {
     const Track& track = tracks_[ti];
     const Eigen::Vector2d predicted = track.filter.position();
-    const double meas_sigma = track.large || !use_registration ? p.centroid_sigma
-                                                               : p.registration_sigma;
+    const double meas_sigma =
+        track.large || !use_registration ? p.centroid_sigma : p.registration_sigma;
     const Eigen::Matrix2d S =
         track.filter.innovationCovariance(Eigen::Matrix2d::Identity() * meas_sigma * meas_sigma);
-    const double sigma = std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(
-                                                     S, Eigen::EigenvaluesOnly)
-                                                     .eigenvalues()
-                                                     .maxCoeff()));
+    const double sigma = std::sqrt(
+        std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(S, Eigen::EigenvaluesOnly)
+                          .eigenvalues()
+                          .maxCoeff()));
     const double search = std::min(p.max_gate_radius, p.gate_sigmas * sigma + accel_term);
     for (std::size_t c = 0; c < candidates.size(); ++c) {
       auto& cand = candidates[c];
@@ -239,7 +241,8 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
       // Objects far too low to be movers and big structures are not worth a registration. Half
       // the mover height is used so that a vehicle whose visible height fluctuates around
       // min_mover_height keeps its registered track.
-      const bool cand_registrable = !cand.features.large && cand.features.height >= 0.5 * p.min_mover_height;
+      const bool cand_registrable =
+          !cand.features.large && cand.features.height >= 0.5 * p.min_mover_height;
       // A track with a model is only ever updated by registration: mixing centroid measurements
       // into its reference-point track would fake motion.
       if (use_registration && track.model && !cand_registrable) continue;
@@ -335,16 +338,17 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     t.missed = 0;
     t.similarity = m.similarity;
     t.features = cand.features;
-    t.large = t.large || cand.features.large;
+    // Not latched: a far vehicle merged with a hedge for a while must become a candidate again.
+    t.large = cand.features.large;
     {
       // Fast only when the speed is above the threshold and well above its own uncertainty.
       const Eigen::Vector2d v = t.filter.velocity();
       const double speed = v.norm();
       double sigma_v = 0;
       if (speed > 0)
-        sigma_v = std::sqrt(std::max(
-            0.0, v.dot(t.filter.getCovariance().template bottomRightCorner<2, 2>() * v)) /
-                            (speed * speed));
+        sigma_v = std::sqrt(
+            std::max(0.0, v.dot(t.filter.getCovariance().template bottomRightCorner<2, 2>() * v)) /
+            (speed * speed));
       t.fast.push_back(speed > p.mover_speed && speed > p.mover_speed_sigmas * sigma_v ? 1 : 0);
     }
     while (static_cast<int>(t.fast.size()) > p.mover_window) t.fast.pop_front();
@@ -360,7 +364,8 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     // A track born too low (e.g. half hidden) gets its model once it is seen tall enough.
     // Its velocity so far came from centroids of a partial view, which jump when the rest of
     // the object appears: the registered track starts afresh (position and age are kept).
-    if (use_registration && !t.model && !t.large && cand.features.height >= 0.5 * p.min_mover_height) {
+    if (use_registration && !t.model && !t.large &&
+        cand.features.height >= 0.5 * p.min_mover_height) {
       ensurePoints(*cloud, clusters[m.cluster], candidates[m.cluster]);
       t.model = makeModel(candidates[m.cluster], sensor_origin);
       t.filter.initialize(cand.features.centroid.template head<2>(),
@@ -369,8 +374,8 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
       t.z = cand.features.centroid.z();
       t.hits = 1;
       t.fast.assign(1, 0);
-      t.history.assign(1, Eigen::Vector3d(cand.features.centroid.x(), cand.features.centroid.y(),
-                                          time));
+      t.history.assign(
+          1, Eigen::Vector3d(cand.features.centroid.x(), cand.features.centroid.y(), time));
     }
     decideMover(t);
     r.track_id = t.id;
@@ -401,8 +406,8 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     Track t;
     t.id = next_id_++;
     t.filter.setAccelerationNoise(p.acceleration_noise);
-    const double sigma = cand.features.large || !use_registration ? p.centroid_sigma
-                                                                   : p.registration_sigma;
+    const double sigma =
+        cand.features.large || !use_registration ? p.centroid_sigma : p.registration_sigma;
     t.filter.initialize(cand.features.centroid.template head<2>(),
                         Eigen::Matrix2d::Identity() * sigma * sigma, Eigen::Vector2d::Zero(),
                         p.initial_velocity_sigma);
