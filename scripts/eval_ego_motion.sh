@@ -70,5 +70,5 @@ pitch, which is most of the rotation error listed. On KITTI odometry 00 the esti
 consistently ~0.71 m per frame where the GPS/INS ground truth says 0.86 m: a brute-force search
 of the horizontal shift that best overlaps the non-ground points of consecutive raw scans also
 gives 0.70–0.73 m, so the scans themselves disagree with the ground-truth scale over these 6
-frames (the raw scans are not motion-compensated); the shortfall is reported, not tuned away.
+frames; we have not found why, and the shortfall is reported, not tuned away.
 EOF

@@ -399,7 +399,7 @@ class BadInputs : public ::testing::Test {
     row("single-point frames", in("seq_single"), Expect::kEither, invalid);
     row("duplicate-point frames", in("seq_duplicates"), Expect::kEither, invalid);
     row("huge coordinates", in("seq_huge"), Expect::kEither,
-        {"range", "huge", "field of view", "finite", "no point", "invalid"});
+        {"range", "huge", "field of view", "finite", "no point", "invalid", "valid points"});
     row("non-empty output folder", in("seq_good"), Expect::kFail,
         {"not empty", "exists", "--overwrite"}, dir_ + "/existing_out");
     row("output below a regular file", in("seq_good"), Expect::kFail,
@@ -427,7 +427,7 @@ class BadInputs : public ::testing::Test {
       frow("single point", in("single.pcd"), Expect::kEither, invalid);
       frow("duplicate points", in("duplicates.pcd"), Expect::kEither, invalid);
       frow("huge coordinates", in("huge.pcd"), Expect::kEither,
-           {"range", "huge", "field of view", "finite", "no point", "invalid"});
+           {"range", "huge", "field of view", "finite", "no point", "invalid", "valid points"});
       frow("existing output file", good_frame_, Expect::kFail, {"exists", "--overwrite"},
            dir_ + "/existing_file.pcd");
     }
@@ -531,6 +531,27 @@ TEST(BadInputsInProcess, GroundPlaneFilterSurvivesHugeCoordinates) {
   // Still a working filter: the patch is (mostly) ground, the three huge points are not.
   EXPECT_GE(non_ground.size(), 3u);
   EXPECT_LT(non_ground.size(), cloud->size());
+}
+
+// Regression (found by fuzz_pcd_pipeline, test/fuzz/corpus_pcd/regression_no_type_line.pcd): a PCD
+// whose TYPE line is corrupted reads as 0 points, and readScan then ran pcl::fromPCLPointCloud2
+// on the empty blob, which takes &cloud[0] of an empty vector (undefined behaviour, reported by
+// UBSan in the sanitizer build). An empty result must be an InputError or an empty cloud.
+TEST(BadInputsInProcess, ReadScanOfPcdWithCorruptTypeLine) {
+  char tmpl[] = "/tmp/pcl_movers_corrupt_type_XXXXXX";
+  ASSERT_NE(mkdtemp(tmpl), nullptr);
+  const std::string path = std::string(tmpl) + "/corrupt.pcd";
+  writeFile(path,
+            "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nHEIGTYPE F F F\nCOUNT 1 1 1\nWIDTH 2\n"
+            "HEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2\nDATA ascii\n8 0 -0.4\n-19 0 -1.7\n");
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  try {
+    pcl_movers::io::readScan(path, cloud);
+    EXPECT_TRUE(cloud.empty());
+  } catch (const pcl_movers::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("corrupt.pcd"), std::string::npos) << e.what();
+  }
+  fs::remove_all(tmpl);
 }
 
 TEST_F(BadInputs, Ground) {
