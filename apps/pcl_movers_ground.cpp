@@ -227,6 +227,7 @@ int run(int argc, char** argv) {
   const std::string& output = positional[1];
   const auto inputs = pcl_movers::tools::listScanInputs(input);
   std::vector<std::string> outputs;
+  pcl_movers::tools::OutputCleanup cleanup(output);
   if (fs::is_directory(input)) {
     pcl_movers::io::prepareOutputDirectory(output, opt.overwrite);
     for (const auto& path : inputs)
@@ -243,9 +244,11 @@ int run(int argc, char** argv) {
   pcl_movers::tools::ProgressBar bar(inputs.size());
   for (std::size_t i = 0; i < inputs.size(); ++i) {
     processOne(inputs[i], outputs[i], opt, ground, points, ms);
+    cleanup.track(outputs[i]);
     bar.update(i + 1);
   }
   bar.finish();
+  cleanup.commit();
   pcl::console::print_info("%zu scan(s), %zu points, %zu %s, %.2f ms per scan -> %s\n",
                            inputs.size(), points, ground,
                            opt.mode == "nonground" ? "non-ground" : "ground",

@@ -82,6 +82,16 @@ int runTool(const char* tool_name, const std::function<int()>& body) {
   return 1;
 }
 
+OutputCleanup::OutputCleanup(std::string output)
+    : output_(std::move(output)), existed_(fs::exists(output_)) {}
+
+OutputCleanup::~OutputCleanup() {
+  if (committed_) return;
+  std::error_code ec;
+  for (const auto& path : written_) fs::remove(path, ec);
+  if (!existed_) fs::remove_all(output_, ec);
+}
+
 ProgressBar::ProgressBar(std::size_t total, std::string unit, bool force)
     : total_(total), unit_(std::move(unit)), enabled_(force || isatty(STDERR_FILENO)) {}
 

@@ -42,6 +42,26 @@ std::vector<std::string> listScanInputs(const std::string& file_or_folder);
 /** \brief Runs `body`, turns exceptions into a clear "[tool] error: ..." and exit code 1. */
 int runTool(const char* tool_name, const std::function<int()>& body);
 
+/** \brief Leaves nothing half-written behind: remembers whether an output file or folder existed
+ * before the run and which files the run wrote; unless commit() is called (the run succeeded),
+ * the destructor removes those files and, when the run created the output, the output itself. */
+class OutputCleanup {
+ public:
+  explicit OutputCleanup(std::string output);
+  ~OutputCleanup();
+  OutputCleanup(const OutputCleanup&) = delete;
+  OutputCleanup& operator=(const OutputCleanup&) = delete;
+  /** \brief A file this run wrote (removed on failure). */
+  void track(const std::string& path) { written_.push_back(path); }
+  void commit() { committed_ = true; }
+
+ private:
+  std::string output_;
+  bool existed_;
+  bool committed_ = false;
+  std::vector<std::string> written_;
+};
+
 /** \brief A one-line progress bar on stderr ("[=====>     ] 42/77 frames"), only on a terminal
  * unless `force`. */
 class ProgressBar {

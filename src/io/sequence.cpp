@@ -142,6 +142,13 @@ void readScan(const std::string& path, pcl::PointCloud<PointT>& cloud) {
     throw InputError(path, 0, "could not read PCD data (truncated or malformed file)");
   if (blob.data.size() < static_cast<std::size_t>(blob.width) * blob.height * blob.point_step)
     throw InputError(path, 0, "truncated PCD data");
+  if (static_cast<std::size_t>(blob.width) * blob.height == 0) {
+    // pcl::fromPCLPointCloud2 indexes the first point even of an empty blob: return empty here.
+    cloud.clear();
+    cloud.sensor_origin_ = origin;
+    cloud.sensor_orientation_ = orientation;
+    return;
+  }
   if constexpr (pcl::traits::has_intensity_v<PointT>) {
     if (!hasField(blob, "intensity")) {
       // A PCD without intensity is still a valid scan: read x y z, intensity 0.

@@ -146,8 +146,10 @@ void GroundPlaneFilter<PointT>::applyFilter(pcl::Indices& indices) {
   ring_lut_.resize(bins);
   for (int b = 0; b < bins; ++b) ring_lut_[b] = ringOf(static_cast<float>(b) / kBinsPerMetre);
   auto ringFast = [&](float r) {
+    // Compare in float before the cast: huge (finite) coordinates overflow r to inf, and casting
+    // inf to int is undefined.
+    if (!(r * kBinsPerMetre < static_cast<float>(bins))) return rings - 1;
     const int b = static_cast<int>(r * kBinsPerMetre);
-    if (b >= bins) return rings - 1;
     int ring = ring_lut_[b];
     while (ring + 1 < rings && r >= ring_edges_[ring + 1]) ++ring;
     return ring;
