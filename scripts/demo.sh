@@ -16,4 +16,4 @@ if [ ! -d "$SAMPLE/frames" ]; then
   [ -d "$SAMPLE/frames" ] || "$BIN/pcl_movers_simulate" data/scenarios/sample.yaml "$SAMPLE" --overwrite
 fi
 "$BIN/pcl_movers_detect" "$SAMPLE" "$OUT" --overwrite
-"$BIN/pcl_movers_eval" "$SAMPLE/objects.txt" "$OUT/tracks.csv" --sector-deg 180
+"$BIN/pcl_movers_eval" "$SAMPLE/objects.txt" "$OUT/tracks.csv" --sequence "$SAMPLE" --sector-deg 180
