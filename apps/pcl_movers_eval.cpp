@@ -77,18 +77,7 @@ void printHelp(const char* argv0) {
       d.metrics.grow_xy, d.metrics.grow_z, d.title.c_str());
 }
 
-double parseNumber(const std::string& flag, const std::string& text) {
-  std::size_t used = 0;
-  double v = 0;
-  try {
-    v = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used != text.size() || !std::isfinite(v))
-    throw InputError(flag + ": expected a number, got '" + text + "'");
-  return v;
-}
+using pcl_movers::tools::parseNumber;
 
 int parseCount(const std::string& flag, const std::string& text, int min_value) {
   const double v = parseNumber(flag, text);

@@ -92,18 +92,7 @@ void printHelp(const char* argv0) {
       d.floor, d.gap, d.min_points, d.min_fraction);
 }
 
-double parseNumber(const std::string& flag, const std::string& text) {
-  std::size_t used = 0;
-  double v = 0;
-  try {
-    v = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used != text.size() || !std::isfinite(v))
-    throw InputError(flag + ": expected a number, got '" + text + "'");
-  return v;
-}
+using pcl_movers::tools::parseNumber;
 
 double nonNegative(const std::string& flag, const std::string& text) {
   const double v = parseNumber(flag, text);

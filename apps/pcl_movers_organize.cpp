@@ -62,18 +62,7 @@ void printHelp(const char* argv0) {
       argv0, kSensors, d.sensor.c_str(), d.columns, double(d.max_range));
 }
 
-double parseNumber(const std::string& flag, const std::string& text) {
-  std::size_t used = 0;
-  double v = 0;
-  try {
-    v = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used != text.size() || !std::isfinite(v))
-    throw InputError(flag + ": expected a number, got '" + text + "'");
-  return v;
-}
+using pcl_movers::tools::parseNumber;
 
 /** Reads a scan and rejects what cannot be processed, naming the file and the problem. */
 Cloud::Ptr readChecked(const std::string& path) {

@@ -81,86 +81,10 @@ void printHelp(const char* argv0) {
       d.sensor_height);
 }
 
-double parseNumber(const std::string& flag, const std::string& text) {
-  std::size_t used = 0;
-  double v = 0;
-  try {
-    v = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used != text.size() || !std::isfinite(v))
-    throw InputError(flag + ": expected a number, got '" + text + "'");
-  return v;
-}
-
-/** Reads a scan and rejects what cannot be processed, naming the file and the problem. */
-Cloud::Ptr readChecked(const std::string& path) {
-  Cloud::Ptr cloud(new Cloud);
-  pcl_movers::io::readScan(path, *cloud);
-  if (cloud->empty()) throw InputError(path, 0, "the cloud is empty");
-  std::size_t finite = 0, nan = 0;
-  for (std::size_t i = 0; i < cloud->size(); ++i) {
-    const auto& p = (*cloud)[i];
-    if (std::isinf(p.x) || std::isinf(p.y) || std::isinf(p.z))
-      throw InputError(path, 0, "point " + std::to_string(i) + " has an infinite coordinate");
-    if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))
-      ++finite;
-    else
-      ++nan;
-  }
-  if (finite == 0) throw InputError(path, 0, "no finite point (all NaN)");
-  if (nan > 0 && !cloud->isOrganized())
-    pcl::console::print_warn("%s: %zu NaN point(s) in an unorganized cloud are left out\n",
-                             path.c_str(), nan);
-  return cloud;
-}
-
-/** x y z intensity label (uint32), in the input's order and layout. */
-void labelledBlob(const Cloud& cloud, const std::vector<std::uint32_t>& labels,
-                  pcl::PCLPointCloud2& blob) {
-  blob = pcl::PCLPointCloud2();
-  blob.header = cloud.header;
-  blob.width = cloud.width;
-  blob.height = cloud.height;
-  blob.is_dense = cloud.is_dense;
-  const char* names[] = {"x", "y", "z", "intensity", "label"};
-  for (int f = 0; f < 5; ++f) {
-    pcl::PCLPointField field;
-    field.name = names[f];
-    field.offset = 4 * f;
-    field.datatype = f < 4 ? pcl::PCLPointField::FLOAT32 : pcl::PCLPointField::UINT32;
-    field.count = 1;
-    blob.fields.push_back(field);
-  }
-  blob.point_step = 20;
-  blob.row_step = blob.point_step * blob.width;
-  blob.data.resize(std::size_t(blob.point_step) * cloud.size());
-  for (std::size_t i = 0; i < cloud.size(); ++i) {
-    std::uint8_t* dst = &blob.data[i * blob.point_step];
-    const float xyzi[4] = {cloud[i].x, cloud[i].y, cloud[i].z, cloud[i].intensity};
-    std::memcpy(dst, xyzi, sizeof(xyzi));
-    std::memcpy(dst + 16, &labels[i], sizeof(std::uint32_t));
-  }
-}
-
-/** Writes binary PCD next to the target, then renames: no half-written file on failure. */
-void writeAtomically(const std::string& path,
-                     const std::function<int(pcl::PCDWriter&, const std::string&)>& write) {
-  const std::string tmp = path + ".tmp";
-  pcl::PCDWriter writer;
-  if (write(writer, tmp) != 0) {
-    std::error_code ec;
-    fs::remove(tmp, ec);
-    throw InputError(path, 0, "cannot write");
-  }
-  std::error_code ec;
-  fs::rename(tmp, path, ec);
-  if (ec) {
-    fs::remove(tmp, ec);
-    throw InputError(path, 0, "cannot write (" + ec.message() + ")");
-  }
-}
+using pcl_movers::tools::labelledBlob;
+using pcl_movers::tools::parseNumber;
+using pcl_movers::tools::readScanChecked;
+using pcl_movers::tools::writeAtomically;
 
 struct Totals {
   std::size_t points = 0, clusters = 0, unplaced = 0;
@@ -168,7 +92,7 @@ struct Totals {
 };
 
 void processOne(const std::string& in, const std::string& out, const Options& opt, Totals& totals) {
-  const Cloud::Ptr cloud = readChecked(in);
+  const Cloud::Ptr cloud = readScanChecked(in);
   const std::size_t n = cloud->size();
   const auto t0 = std::chrono::steady_clock::now();
   std::vector<std::uint8_t> is_ground(n, 0);

@@ -7,8 +7,10 @@
 
 #include <unistd.h>
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 
 namespace fs = std::filesystem;
@@ -67,6 +69,84 @@ std::vector<std::string> listScanInputs(const std::string& file_or_folder) {
   if (ext != ".pcd" && ext != ".bin")
     throw InputError(file_or_folder, 0, "unknown scan format (expected .pcd or KITTI .bin)");
   return {file_or_folder};
+}
+
+double parseNumber(const std::string& flag, const std::string& text) {
+  std::size_t used = 0;
+  double v = 0;
+  try {
+    v = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != text.size() || !std::isfinite(v))
+    throw InputError(flag + ": expected a number, got '" + text + "'");
+  return v;
+}
+
+pcl::PointCloud<pcl::PointXYZI>::Ptr readScanChecked(const std::string& path) {
+  auto cloud = pcl::make_shared<pcl::PointCloud<pcl::PointXYZI>>();
+  io::readScan(path, *cloud);
+  if (cloud->empty()) throw InputError(path, 0, "the cloud is empty");
+  std::size_t finite = 0, nan = 0;
+  for (std::size_t i = 0; i < cloud->size(); ++i) {
+    const auto& p = (*cloud)[i];
+    if (std::isinf(p.x) || std::isinf(p.y) || std::isinf(p.z))
+      throw InputError(path, 0, "point " + std::to_string(i) + " has an infinite coordinate");
+    if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))
+      ++finite;
+    else
+      ++nan;
+  }
+  if (finite == 0) throw InputError(path, 0, "no finite point (all NaN)");
+  if (nan > 0 && !cloud->isOrganized())
+    pcl::console::print_warn("%s: %zu NaN point(s) in an unorganized cloud are left out\n",
+                             path.c_str(), nan);
+  return cloud;
+}
+
+void labelledBlob(const pcl::PointCloud<pcl::PointXYZI>& cloud,
+                  const std::vector<std::uint32_t>& labels, pcl::PCLPointCloud2& blob) {
+  blob = pcl::PCLPointCloud2();
+  blob.header = cloud.header;
+  blob.width = cloud.width;
+  blob.height = cloud.height;
+  blob.is_dense = cloud.is_dense;
+  const char* names[] = {"x", "y", "z", "intensity", "label"};
+  for (int f = 0; f < 5; ++f) {
+    pcl::PCLPointField field;
+    field.name = names[f];
+    field.offset = 4 * f;
+    field.datatype = f < 4 ? pcl::PCLPointField::FLOAT32 : pcl::PCLPointField::UINT32;
+    field.count = 1;
+    blob.fields.push_back(field);
+  }
+  blob.point_step = 20;
+  blob.row_step = blob.point_step * blob.width;
+  blob.data.resize(std::size_t(blob.point_step) * cloud.size());
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    std::uint8_t* dst = &blob.data[i * blob.point_step];
+    const float xyzi[4] = {cloud[i].x, cloud[i].y, cloud[i].z, cloud[i].intensity};
+    std::memcpy(dst, xyzi, sizeof(xyzi));
+    std::memcpy(dst + 16, &labels[i], sizeof(std::uint32_t));
+  }
+}
+
+void writeAtomically(const std::string& path,
+                     const std::function<int(pcl::PCDWriter&, const std::string&)>& write) {
+  const std::string tmp = path + ".tmp";
+  pcl::PCDWriter writer;
+  if (write(writer, tmp) != 0) {
+    std::error_code ec;
+    fs::remove(tmp, ec);
+    throw InputError(path, 0, "cannot write");
+  }
+  std::error_code ec;
+  fs::rename(tmp, path, ec);
+  if (ec) {
+    fs::remove(tmp, ec);
+    throw InputError(path, 0, "cannot write (" + ec.message() + ")");
+  }
 }
 
 int runTool(const char* tool_name, const std::function<int()>& body) {

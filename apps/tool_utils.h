@@ -7,9 +7,14 @@
 
 #include <pcl_movers/common.h>
 
+#include <pcl/PCLPointCloud2.h>
 #include <pcl/console/parse.h>
 #include <pcl/console/print.h>
+#include <pcl/io/pcd_io.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
 
+#include <cstdint>
 #include <exception>
 #include <functional>
 #include <string>
@@ -38,6 +43,22 @@ std::vector<std::string> positionalArguments(int argc, char** argv,
 /** \brief Input scans of a tool that takes "file or folder": a single .pcd/.bin file, or the
  * frames of a sequence folder (see io::SequenceReader), sorted numerically. Throws InputError. */
 std::vector<std::string> listScanInputs(const std::string& file_or_folder);
+
+/** \brief Parses a finite number given to `flag`; throws InputError naming the flag. */
+double parseNumber(const std::string& flag, const std::string& text);
+
+/** \brief Reads a scan and rejects what cannot be processed (empty, all NaN, infinite
+ * coordinates), naming the file and the problem; warns about NaN points of unorganized clouds. */
+pcl::PointCloud<pcl::PointXYZI>::Ptr readScanChecked(const std::string& path);
+
+/** \brief x y z intensity label (uint32), in the cloud's order and layout. */
+void labelledBlob(const pcl::PointCloud<pcl::PointXYZI>& cloud,
+                  const std::vector<std::uint32_t>& labels, pcl::PCLPointCloud2& blob);
+
+/** \brief Writes a PCD next to `path` with `write`, then renames it into place, so a failure
+ * never leaves a half-written file. Throws InputError. */
+void writeAtomically(const std::string& path,
+                     const std::function<int(pcl::PCDWriter&, const std::string&)>& write);
 
 /** \brief Runs `body`, turns exceptions into a clear "[tool] error: ..." and exit code 1. */
 int runTool(const char* tool_name, const std::function<int()>& body);

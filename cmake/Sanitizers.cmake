@@ -25,6 +25,13 @@ if(PCL_MOVERS_SANITIZE OR PCL_MOVERS_BUILD_FUZZERS)
       -fsanitize=address,undefined -fno-sanitize=vptr -fno-sanitize-recover=undefined
       -fno-omit-frame-pointer)
   add_compile_options(${PCL_MOVERS_SANITIZER_FLAGS})
+  # Eigen (Memory.h) stops trusting glibc's 16-byte malloc alignment when __SANITIZE_ADDRESS__ is
+  # defined and switches to its handmade aligned malloc/free, which store an offset before the
+  # block. The uninstrumented PCL keeps plain malloc/free, so an Eigen vector resized inside PCL
+  # and freed in our code (or the reverse) would be freed by the wrong scheme: ASan reported this
+  # as a heap-buffer-overflow in handmade_aligned_free under GroundPlaneFilter::fitPlane. Keep one
+  # allocation scheme for the whole process, as in the normal build.
+  add_compile_definitions(EIGEN_MALLOC_ALREADY_ALIGNED=1)
   add_link_options(-fsanitize=address,undefined -fno-sanitize=vptr)
   message(STATUS "pcl_movers: AddressSanitizer + UndefinedBehaviorSanitizer enabled")
 endif()

@@ -168,8 +168,9 @@ void GroundPlaneFilter<PointT>::applyFilter(pcl::Indices& indices) {
     const float dx = p.x - origin.x(), dy = p.y - origin.y();
     const float r = std::sqrt(dx * dx + dy * dy);
     const int ring = ringFast(r);
+    // r = inf (overflow on huge coordinates) would make the diamond angle NaN: sector 0 then.
     const int sector =
-        r > 0.f
+        r > 0.f && std::isfinite(r)
             ? std::min(static_cast<int>(detail::diamondAngle(dx, dy) * sector_scale), sectors - 1)
             : 0;
     const int cell = ring * sectors + sector;
