@@ -216,19 +216,9 @@ int run(int argc, char** argv) {
   const std::string& input = positional[0];
   const std::string& output = positional[1];
   const auto inputs = pcl_movers::tools::listScanInputs(input);
-  std::vector<std::string> outputs;
   pcl_movers::tools::OutputCleanup cleanup(output);
-  if (fs::is_directory(input)) {
-    pcl_movers::io::prepareOutputDirectory(output, opt.overwrite);
-    for (const auto& path : inputs)
-      outputs.push_back((fs::path(output) / fs::path(path).stem()).string() + ".pcd");
-  } else {
-    if (fs::is_directory(output))
-      throw InputError(output, 0, "is a folder; give an output .pcd file for a single scan");
-    if (fs::exists(output) && !opt.overwrite)
-      throw InputError(output, 0, "exists (use --overwrite to replace it)");
-    outputs.push_back(output);
-  }
+  const std::vector<std::string> outputs =
+      pcl_movers::tools::planScanOutputs(input, inputs, output, opt.overwrite);
   Totals totals;
   pcl_movers::tools::ProgressBar bar(inputs.size());
   for (std::size_t i = 0; i < inputs.size(); ++i) {

@@ -149,6 +149,24 @@ void writeAtomically(const std::string& path,
   }
 }
 
+std::vector<std::string> planScanOutputs(const std::string& input,
+                                         const std::vector<std::string>& inputs,
+                                         const std::string& output, bool overwrite) {
+  std::vector<std::string> outputs;
+  if (fs::is_directory(input)) {
+    io::prepareOutputDirectory(output, overwrite);
+    for (const auto& path : inputs)
+      outputs.push_back((fs::path(output) / fs::path(path).stem()).string() + ".pcd");
+  } else {
+    if (fs::is_directory(output))
+      throw InputError(output, 0, "is a folder; give an output .pcd file for a single scan");
+    if (fs::exists(output) && !overwrite)
+      throw InputError(output, 0, "exists (use --overwrite to replace it)");
+    outputs.push_back(output);
+  }
+  return outputs;
+}
+
 int runTool(const char* tool_name, const std::function<int()>& body) {
   try {
     return body();

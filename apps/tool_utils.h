@@ -44,6 +44,13 @@ std::vector<std::string> positionalArguments(int argc, char** argv,
  * frames of a sequence folder (see io::SequenceReader), sorted numerically. Throws InputError. */
 std::vector<std::string> listScanInputs(const std::string& file_or_folder);
 
+/** \brief Output paths of a "file or folder" tool: for a folder INPUT, OUTPUT is prepared as a
+ * folder (see io::prepareOutputDirectory) holding one `<stem>.pcd` per input scan; for a single
+ * scan, OUTPUT is a .pcd file that must not exist unless `overwrite`. Throws InputError. */
+std::vector<std::string> planScanOutputs(const std::string& input,
+                                         const std::vector<std::string>& inputs,
+                                         const std::string& output, bool overwrite);
+
 /** \brief Parses a finite number given to `flag`; throws InputError naming the flag. */
 double parseNumber(const std::string& flag, const std::string& text);
 
