@@ -10,22 +10,7 @@
 # rendering) when there is no X display; a GPU display is faster.
 set -euo pipefail
 
-if [[ $# -lt 1 || "$1" == "-h" || "$1" == "--help" ]]; then
-  sed -n '2,9p' "$0" | sed 's/^# \{0,1\}//'
-  exit $([[ $# -lt 1 ]] && echo 1 || echo 0)
-fi
-root="$(cd "$(dirname "$0")/.." && pwd)"
-build="$(cd "$1" && pwd)"
-shared="${2:-$root/../shared/data}"
-apps="$build/apps"
-for tool in pcl_movers_viewer pcl_movers_detect pcl_movers_simulate; do
-  [[ -x "$apps/$tool" ]] || { echo "error: $apps/$tool not built" >&2; exit 1; }
-done
-work="$(mktemp -d)"
-trap 'rm -rf "$work"' EXIT
-
-xvfb=()
-[[ -n "${DISPLAY:-}" ]] || xvfb=(xvfb-run -a -s "-screen 0 1920x1080x24")
+source "$(dirname "$0")/viewer_common.sh"
 
 # "wall cpu" seconds (cpu = user + sys of the viewer, xvfb-run and Xvfb) for rendering frames
 # A:B of a sequence with the given extra options.
@@ -52,11 +37,6 @@ row() {
     printf "| %s | %.0f | %.0f | %.1f |\n", l, wall, cpu, x[1] }'
 }
 
-sample="$root/data/sample"
-if [[ ! -d "$sample" ]]; then
-  "$apps/pcl_movers_simulate" "$root/data/scenarios/sample.yaml" "$work/sample" >/dev/null
-  sample="$work/sample"
-fi
 "$apps/pcl_movers_detect" "$sample" "$work/sample_det" --labelled-clouds >/dev/null 2>&1
 
 load=$(cut -d' ' -f1 /proc/loadavg)

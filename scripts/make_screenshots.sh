@@ -9,38 +9,10 @@
 # (with a message) when it is missing.
 set -euo pipefail
 
-if [[ $# -lt 1 || "$1" == "-h" || "$1" == "--help" ]]; then
-  sed -n '2,9p' "$0" | sed 's/^# \{0,1\}//'
-  exit $([[ $# -lt 1 ]] && echo 1 || echo 0)
-fi
-root="$(cd "$(dirname "$0")/.." && pwd)"
-build="$(cd "$1" && pwd)"
-shared="${2:-$root/../shared/data}"
-apps="$build/apps"
-for tool in pcl_movers_viewer pcl_movers_detect pcl_movers_simulate; do
-  [[ -x "$apps/$tool" ]] || { echo "error: $apps/$tool not built" >&2; exit 1; }
-done
+source "$(dirname "$0")/viewer_common.sh"
 images="$root/docs/images"
 mkdir -p "$images"
-work="$(mktemp -d)"
-trap 'rm -rf "$work"' EXIT
 
-# Off-screen rendering still needs an X server (Debian's VTK is built for X11).
-run_viewer() {
-  if [[ -n "${DISPLAY:-}" ]]; then
-    "$apps/pcl_movers_viewer" "$@"
-  else
-    xvfb-run -a -s "-screen 0 1920x1080x24" "$apps/pcl_movers_viewer" "$@"
-  fi
-}
-
-# 1. Simulated scene: data/sample if it exists, else simulated from data/scenarios/sample.yaml.
-sample="$root/data/sample"
-if [[ ! -d "$sample" ]]; then
-  echo "data/sample not found: simulating data/scenarios/sample.yaml" >&2
-  "$apps/pcl_movers_simulate" "$root/data/scenarios/sample.yaml" "$work/sample" >/dev/null
-  sample="$work/sample"
-fi
 "$apps/pcl_movers_detect" "$sample" "$work/sample_det" --labelled-clouds >/dev/null
 run_viewer "$sample" --detections "$work/sample_det" --ground-truth --frames 25 \
   --size 1280x720 --camera chase --screenshot-dir "$work/sample_shots" >/dev/null
