@@ -5,6 +5,7 @@
 #include <pcl_movers/impl/surface_density.hpp>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -52,6 +53,11 @@ void axisWeights(float mean, float sigma, float origin, float cell, int n, AxisW
 
 }  // namespace
 
+std::uint64_t SurfaceDensity::nextRevision() {
+  static std::atomic<std::uint64_t> counter{0};
+  return ++counter;
+}
+
 void SurfaceDensity::resize(int nx, int ny, int nz) {
   if (nx < 1 || ny < 1 || nz < 1)
     throw std::invalid_argument("SurfaceDensity: grid size must be at least 1x1x1, got " +
@@ -62,14 +68,18 @@ void SurfaceDensity::resize(int nx, int ny, int nz) {
   nz_ = nz;
   data_.assign(static_cast<std::size_t>(nx) * ny * nz, 0.f);
   sqrt_.assign(data_.size(), 0.f);
+  revision_ = nextRevision();
 }
 
 void SurfaceDensity::clear() {
   std::fill(data_.begin(), data_.end(), 0.f);
   std::fill(sqrt_.begin(), sqrt_.end(), 0.f);
+  revision_ = nextRevision();
 }
 
 void SurfaceDensity::updateSqrt() {
+  // Every change of the values ends here: a new revision for caches keyed on the content.
+  revision_ = nextRevision();
   sqrt_.resize(data_.size());
   for (std::size_t i = 0; i < data_.size(); ++i) sqrt_[i] = std::sqrt(data_[i]);
 }
