@@ -645,6 +645,77 @@ void BM_SurfaceDensity(benchmark::State& state) {
 }
 BENCHMARK(BM_SurfaceDensity)->Unit(benchmark::kMicrosecond);
 
+/** The MoverTracker's call pattern (include/pcl_movers/impl/mover_tracker.hpp,
+ * registerCandidate): one registration object reused for every (track, candidate) pair; per
+ * call the candidate (≤ 100 points) as source, the track's accumulated 29×29×7 model as target
+ * density, the full setter sequence, align() with a translation-only guess, then a copy of the
+ * view density. Candidates are registered against several models in turn, as in a frame. */
+void BM_TrackerPattern(benchmark::State& state) {
+  struct Case {
+    pcl::PointCloud<pcl::PointXYZ>::Ptr candidate;
+    pcl_movers::SurfaceDensity::Ptr model;
+    Eigen::Vector3f sensor;
+    Eigen::Vector2f predicted;
+  };
+  static const std::vector<Case> cases = [] {
+    std::vector<Case> out;
+    const auto pairs = pcl_movers::eval::makeSimulatedPairs(24, 21);
+    for (const auto& p : pairs) {
+      Case c;
+      // Candidate: the tracker subsamples clusters to max_registration_points = 100.
+      c.candidate = pcl::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
+      const double stride = std::max(1.0, static_cast<double>(p.source->size()) / 100.0);
+      for (double k = 0; k < p.source->size(); k += stride)
+        c.candidate->push_back((*p.source)[static_cast<std::size_t>(k)]);
+      c.sensor = p.source->sensor_origin_.head<3>();
+      Eigen::Vector4f centroid;
+      pcl::compute3DCentroid(*p.target, centroid);
+      c.model = pcl::make_shared<pcl_movers::SurfaceDensity>();
+      c.model->compute(*p.target, p.target->sensor_origin_.head<3>(), centroid.head<3>());
+      // An accumulated model: a second, slightly shifted view blended in with half-life 5.
+      pcl_movers::SurfaceDensity view = *c.model;
+      view.compute(*p.target, p.target->sensor_origin_.head<3>(),
+                   centroid.head<3>() + Eigen::Vector3f(0.05f, -0.03f, 0.f));
+      c.model->accumulate(view, pcl_movers::SurfaceDensity::halfLifeWeight(5.f));
+      const Eigen::Vector4f ref(p.reference.x(), p.reference.y(), p.reference.z(), 1.f);
+      c.predicted = (ref.head<3>() + Eigen::Vector3f(0.3f, -0.2f, 0.f)).head<2>();
+      out.push_back(c);
+    }
+    return out;
+  }();
+  pcl_movers::BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ> reg;
+  const float radii[] = {1.2f, 2.0f, 4.0f};
+  std::size_t i = 0;
+  for (auto _ : state) {
+    // Each candidate against three models (its own and two others), like gated pairs in a frame.
+    const Case& cand = cases[(i / 3) % cases.size()];
+    const Case& track = cases[((i / 3) + (i % 3) * 7) % cases.size()];
+    const float radius = radii[i % 3];
+    ++i;
+    reg.setInputSource(cand.candidate);
+    reg.setTargetDensity(track.model);
+    reg.setSensorOrigin(cand.sensor);
+    reg.setResolution(0.2f);
+    reg.setSearchRadius(radius);
+    reg.setYawSamples(1);
+    reg.setSigmaPerMetre(0.005f);
+    reg.setMinSigma(0.1f);
+    reg.setMinSimilarity(0.3f);
+    const Eigen::Vector3f centre = track.model->getCentre();
+    Eigen::Matrix4f guess = Eigen::Matrix4f::Identity();
+    guess(0, 3) = centre.x() - cand.predicted.x();
+    guess(1, 3) = centre.y() - cand.predicted.y();
+    pcl::PointCloud<pcl::PointXYZ> aligned;
+    reg.align(aligned, guess);
+    const auto view = reg.getSourceDensity();
+    pcl_movers::SurfaceDensity::Ptr copy;
+    if (view) copy.reset(new pcl_movers::SurfaceDensity(*view));
+    benchmark::DoNotOptimize(copy.get());
+  }
+}
+BENCHMARK(BM_TrackerPattern)->Unit(benchmark::kMicrosecond);
+
+
 }  // namespace
 
 int main(int argc, char** argv) {
