@@ -38,6 +38,8 @@ namespace {
 using Cloud = pcl::PointCloud<pcl::PointXYZ>;
 using pcl_movers::eval::RegistrationPair;
 constexpr float kPi = 3.14159265f;
+using BrMethod =
+    pcl_movers::BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ>::CorrelationMethod;
 
 // ------------------------------------------------------------------ methods, with their settings
 // The translation window of every method must cover the 0-3 m offsets of the guesses, so ICP and
@@ -271,8 +273,8 @@ int report() {
     for (const char* c : classes)
       for (int b = 0; b < 3; ++b)
         std::printf(" %s %g-%g m |", c, bands[b], std::floor(bands[b + 1]));
-    std::printf("\n|---|");
-    for (int k = 0; k < 6; ++k) std::printf("---|");
+    std::printf(" not occluded | occluded |\n|---|");
+    for (int k = 0; k < 8; ++k) std::printf("---|");
     std::printf("\n");
     for (std::size_t k = 0; k < ms.size(); ++k) {
       std::printf("| %s |", ms[k].name.c_str());
@@ -288,6 +290,15 @@ int report() {
           }
           std::printf(" %s (%d) |", pct(ok, n).c_str(), n);
         }
+      for (const bool occluded : {false, true}) {
+        int ok = 0, n = 0;
+        for (std::size_t i = 0; i < sim.size(); ++i) {
+          if ((sim[i].label.find("occluded") != std::string::npos) != occluded) continue;
+          ++n;
+          ok += res_sim[k].err[i] < 0.1f;
+        }
+        std::printf(" %s (%d) |", pct(ok, n).c_str(), n);
+      }
       std::printf("\n");
     }
   }
@@ -410,6 +421,10 @@ int report() {
       {"sigma 0.0025 per metre", [](auto& r) { r.setSigmaPerMetre(0.0025f); }},
       {"7 yaw layers (-15..+15 deg)", [](auto& r) { r.setYawSamples(7); }},
       {"full window on every yaw layer", [](auto& r) { r.setFullYawWindow(true); }},
+      {"no sub-cell re-centring (single quadratic fit)",
+       [](auto& r) { r.setSubCellIterations(0); }},
+      {"direct sum forced", [](auto& r) { r.setCorrelationMethod(BrMethod::Direct); }},
+      {"FFT forced", [](auto& r) { r.setCorrelationMethod(BrMethod::FFT); }},
   };
   const auto trials = makeTrials(sim.size(), 11);
   for (const auto& v : variants) {
@@ -714,7 +729,6 @@ void BM_TrackerPattern(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_TrackerPattern)->Unit(benchmark::kMicrosecond);
-
 
 }  // namespace
 

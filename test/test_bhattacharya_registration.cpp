@@ -363,8 +363,8 @@ TEST(BhattacharyaRegistration, FftAndDirectGiveTheSameSurface) {
     bool z;
     int yaws;
   };
-  for (const Setup& s : {Setup{12.f, 3.2f, false, 1}, Setup{45.f, 1.4f, true, 3},
-                         Setup{20.f, 2.0f, false, 5}}) {
+  for (const Setup& s :
+       {Setup{12.f, 3.2f, false, 1}, Setup{45.f, 1.4f, true, 3}, Setup{20.f, 2.0f, false, 5}}) {
     auto target = vehicle(s.x, 2.f, 0.4f, sensor, 0.f, 3);
     auto source = vehicle(s.x + 0.63f, 2.21f, 0.45f, sensor + Eigen::Vector3f(0.5f, 0, 0), 0.4f, 4);
     pcl::PointCloud<pcl::PointXYZ> out;
