@@ -7,6 +7,7 @@
 #include <pcl_movers/bhattacharya_registration.h>
 #include <pcl_movers/io/sequence.h>
 
+#include <pcl/common/io.h>
 #include <pcl/console/parse.h>
 #include <pcl/console/print.h>
 #include <pcl/io/pcd_io.h>
@@ -143,23 +144,16 @@ float positive(const std::string& flag, double v) {
   return static_cast<float>(v);
 }
 
+/** The shared scan check of the tools (missing file, empty, all NaN, infinite coordinates), plus
+ * what a registration needs: at least two finite points. */
 Cloud::Ptr readChecked(const std::string& path) {
-  if (!fs::exists(path)) throw InputError(path, 0, "no such file");
+  const auto scan = pcl_movers::tools::readScanChecked(path);
   Cloud::Ptr cloud(new Cloud);
-  pcl_movers::io::readScan(path, *cloud);
-  if (cloud->empty()) throw InputError(path, 0, "the cloud is empty");
+  pcl::copyPointCloud(*scan, *cloud);
   std::size_t finite = 0;
-  for (std::size_t i = 0; i < cloud->size(); ++i) {
-    const auto& p = (*cloud)[i];
-    if (std::isinf(p.x) || std::isinf(p.y) || std::isinf(p.z))
-      throw InputError(path, 0, "point " + std::to_string(i) + " has an infinite coordinate");
+  for (const auto& p : *cloud)
     if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)) ++finite;
-  }
-  if (finite == 0) throw InputError(path, 0, "no finite point (all NaN)");
   if (finite < 2) throw InputError(path, 0, "fewer than 2 finite points");
-  if (finite < cloud->size())
-    pcl::console::print_warn("%s: %zu NaN point(s) skipped\n", path.c_str(),
-                             cloud->size() - finite);
   return cloud;
 }
 

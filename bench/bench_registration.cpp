@@ -10,6 +10,7 @@
  */
 #include <pcl_movers/bhattacharya_registration.h>
 #include <pcl_movers/eval/registration_pairs.h>
+#include <pcl_movers/impl/bhattacharya_registration.hpp>
 
 #include <pcl/common/centroid.h>
 #include <pcl/console/print.h>
@@ -37,6 +38,8 @@ namespace {
 using Cloud = pcl::PointCloud<pcl::PointXYZ>;
 using pcl_movers::eval::RegistrationPair;
 constexpr float kPi = 3.14159265f;
+using BrMethod =
+    pcl_movers::BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ>::CorrelationMethod;
 
 // ------------------------------------------------------------------ methods, with their settings
 // The translation window of every method must cover the 0-3 m offsets of the guesses, so ICP and
@@ -270,8 +273,8 @@ int report() {
     for (const char* c : classes)
       for (int b = 0; b < 3; ++b)
         std::printf(" %s %g-%g m |", c, bands[b], std::floor(bands[b + 1]));
-    std::printf("\n|---|");
-    for (int k = 0; k < 6; ++k) std::printf("---|");
+    std::printf(" not occluded | occluded |\n|---|");
+    for (int k = 0; k < 8; ++k) std::printf("---|");
     std::printf("\n");
     for (std::size_t k = 0; k < ms.size(); ++k) {
       std::printf("| %s |", ms[k].name.c_str());
@@ -287,6 +290,15 @@ int report() {
           }
           std::printf(" %s (%d) |", pct(ok, n).c_str(), n);
         }
+      for (const bool occluded : {false, true}) {
+        int ok = 0, n = 0;
+        for (std::size_t i = 0; i < sim.size(); ++i) {
+          if ((sim[i].label.find("occluded") != std::string::npos) != occluded) continue;
+          ++n;
+          ok += res_sim[k].err[i] < 0.1f;
+        }
+        std::printf(" %s (%d) |", pct(ok, n).c_str(), n);
+      }
       std::printf("\n");
     }
   }
@@ -409,6 +421,10 @@ int report() {
       {"sigma 0.0025 per metre", [](auto& r) { r.setSigmaPerMetre(0.0025f); }},
       {"7 yaw layers (-15..+15 deg)", [](auto& r) { r.setYawSamples(7); }},
       {"full window on every yaw layer", [](auto& r) { r.setFullYawWindow(true); }},
+      {"no sub-cell re-centring (single quadratic fit)",
+       [](auto& r) { r.setSubCellIterations(0); }},
+      {"direct sum forced", [](auto& r) { r.setCorrelationMethod(BrMethod::Direct); }},
+      {"FFT forced", [](auto& r) { r.setCorrelationMethod(BrMethod::FFT); }},
   };
   const auto trials = makeTrials(sim.size(), 11);
   for (const auto& v : variants) {
@@ -430,6 +446,170 @@ int report() {
                 pct(ok, static_cast<int>(r.err.size())).c_str(), pct(ok25, n25).c_str(),
                 median(r.err), median(r.ms));
   }
+  return 0;
+}
+
+/** Every failed simulated pair of the 5-yaw-layer method with what went wrong (diagnosis). */
+int failures(const char* variant) {
+  pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
+  const std::string v = variant ? variant : "";
+  auto configure = [&](pcl_movers::BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ>& r) {
+    if (v == "full") r.setFullYawWindow(true);
+    if (v == "7") r.setYawSamples(7);
+    if (v == "9") r.setYawSamples(9);
+    if (v == "7full") {
+      r.setYawSamples(7);
+      r.setFullYawWindow(true);
+    }
+    if (v == "s01") r.setSigmaPerMetre(0.01f);
+    if (v == "ms015") r.setMinSigma(0.15f);
+    if (v == "ms02") r.setMinSigma(0.2f);
+    if (v == "z") r.setSearchZ(true);
+    if (v == "v3") r.setVerticalSlices(3);
+    if (v == "v14") {
+      r.setVerticalSlices(14);
+    }
+    if (v == "it0") r.setSubCellIterations(0);
+    if (v == "r15") {
+      r.setResolution(0.15f);
+      r.setGridSize(39, 39, 7);
+    }
+    if (v == "fft")
+      r.setCorrelationMethod(
+          pcl_movers::BhattacharyaRegistration<pcl::PointXYZ,
+                                               pcl::PointXYZ>::CorrelationMethod::FFT);
+    if (v == "direct")
+      r.setCorrelationMethod(
+          pcl_movers::BhattacharyaRegistration<pcl::PointXYZ,
+                                               pcl::PointXYZ>::CorrelationMethod::Direct);
+    if (v == "ms025") r.setMinSigma(0.25f);
+  };
+  int ok25 = 0, n25 = 0;
+  const auto sim = pcl_movers::eval::makeSimulatedPairs(300, 7);
+  const auto trials = makeTrials(sim.size(), 11);
+  Cloud out;
+  int fails = 0;
+  for (const Trial& t : trials) {
+    const RegistrationPair& p = sim[t.pair];
+    auto reg = makeBr(5);
+    configure(*reg);
+    const Eigen::Matrix4f guess = pcl_movers::eval::perturbedGuess(p, t.offset, t.angle);
+    reg->setInputSource(p.source);
+    reg->setInputTarget(p.target);
+    reg->align(out, guess);
+    const Eigen::Matrix4f est = reg->getFinalTransformation();
+    const float err = pcl_movers::eval::translationError(est, p);
+    if (t.offset < 2.5f) {
+      ++n25;
+      ok25 += err < 0.1f;
+    }
+    if (err < 0.1f) continue;
+    ++fails;
+    // B at the truth (guess = truth, radius small) for comparison with B at the found peak.
+    auto at_truth = makeBr(5);
+    configure(*at_truth);
+    at_truth->setSearchRadius(0.4f);
+    at_truth->setInputSource(p.source);
+    at_truth->setInputTarget(p.target);
+    at_truth->align(out, p.truth);
+    const float dyaw = std::atan2(p.truth(1, 0), p.truth(0, 0)) * 180.f / kPi;
+    std::printf(
+        "#%zu %-18s range %5.1f dyaw %6.1f pts %4zu/%4zu offset %.2f err %.3f yawerr %5.1f conv %d "
+        "B "
+        "%.3f  B(truth) %.3f err(truth start) %.3f\n",
+        static_cast<std::size_t>(&t - trials.data()), p.label.c_str(), p.range, dyaw,
+        p.source->size(), p.target->size(), t.offset, err,
+        pcl_movers::eval::yawError(est, p) * 180.f / kPi, reg->hasConverged() ? 1 : 0,
+        reg->getSimilarity(), at_truth->getSimilarity(),
+        pcl_movers::eval::translationError(at_truth->getFinalTransformation(), p));
+  }
+  std::printf("%d failures of %zu; success at offsets <= 2.5 m %d / %d\n", fails, sim.size(), ok25,
+              n25);
+  return 0;
+}
+
+int probe(int which) {
+  pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
+  const auto sim = pcl_movers::eval::makeSimulatedPairs(300, 7);
+  const auto trials = makeTrials(sim.size(), 11);
+  const RegistrationPair& p = sim[trials[which].pair];
+  Cloud out;
+  for (float radius : {0.4f, 3.2f})
+    for (float off : {0.f, 0.05f, 0.1f, 0.15f, 1.0f, 2.87f}) {
+      auto reg = makeBr(5);
+      reg->setSearchRadius(radius);
+      const Eigen::Matrix4f guess = pcl_movers::eval::perturbedGuess(p, off, trials[which].angle);
+      reg->setInputSource(p.source);
+      reg->setInputTarget(p.target);
+      reg->align(out, guess);
+      const Eigen::Matrix4f est = reg->getFinalTransformation();
+      std::printf("radius %.1f off %.2f err %.3f yawerr %.2f B %.4f\n", radius, off,
+                  pcl_movers::eval::translationError(est, p),
+                  pcl_movers::eval::yawError(est, p) * 180.f / kPi, reg->getSimilarity());
+    }
+  return 0;
+}
+
+/** Times the direct and the FFT correlation of the whole window against the cost model, on the
+ * simulated and real pairs and several window radii: the data behind the model's constants. */
+int calibrate() {
+  pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
+  std::vector<RegistrationPair> pairs = pcl_movers::eval::makeSimulatedPairs(60, 7);
+  const std::string folder = std::string(PCL_MOVERS_SHARED_DATA) + "/kitti-tracking-0000-a";
+  if (std::ifstream(folder + "/poses.txt")) {
+    const auto real = pcl_movers::eval::loadKittiPairs(folder, {0, 1, 3}, {1}, 8);
+    pairs.insert(pairs.end(), real.begin(), real.end());
+  }
+  pcl_movers::detail::BhattacharyaWorkspace work;
+  std::printf("points nonzero radius N direct_ms fft_ms direct_model fft_model\n");
+  int agree = 0, total = 0;
+  double t_auto = 0, t_direct = 0, t_fft = 0;
+  for (const auto& p : pairs) {
+    pcl_movers::SurfaceDensity target;
+    Eigen::Vector4f c;
+    pcl::compute3DCentroid(*p.target, c);
+    target.compute(*p.target, p.target->sensor_origin_.head<3>(), c.head<3>());
+    std::vector<Eigen::Vector3f> pts;
+    std::vector<float> sig;
+    for (const auto& q : *p.source) {
+      const Eigen::Vector3f v(q.x, q.y, q.z);
+      pts.push_back(v + (c.head<3>() - v).normalized() * 0.f +
+                    Eigen::Vector3f((p.truth * Eigen::Vector4f(0, 0, 0, 1)).head<3>()));
+      sig.push_back(std::max(0.1f, 0.005f * (v - p.source->sensor_origin_.head<3>()).norm()));
+    }
+    for (float radius : {1.0f, 2.0f, 3.2f, 4.0f}) {
+      const int nr = static_cast<int>(std::ceil(radius / 0.2f - 1e-4f));
+      pcl_movers::detail::SourceLayer layer;
+      pcl_movers::detail::buildSourceLayer(layer, pts, sig, target, nr, 0);
+      const int wx = 2 * nr + 1;
+      std::vector<float> a(static_cast<std::size_t>(wx) * wx), b(a.size());
+      const double dm = pcl_movers::detail::directCost(target, layer, nr, 0);
+      pcl_movers::detail::correlateFft(work, target, layer, nr, 0, b.data());  // warm target cache
+      const double fm = pcl_movers::detail::fftCost(work, target, layer, nr, 0);
+      const int reps = 5;
+      double t0 = cpuMs();
+      for (int r = 0; r < reps; ++r)
+        pcl_movers::detail::correlateDirect(target, layer, -nr, nr, -nr, nr, 0, 0, a.data());
+      const double td = (cpuMs() - t0) / reps;
+      t0 = cpuMs();
+      for (int r = 0; r < reps; ++r)
+        pcl_movers::detail::correlateFft(work, target, layer, nr, 0, b.data());
+      const double tf = (cpuMs() - t0) / reps;
+      float maxdiff = 0.f;
+      for (std::size_t i = 0; i < a.size(); ++i) maxdiff = std::max(maxdiff, std::abs(a[i] - b[i]));
+      std::printf("%zu %zu %.1f %s %.4f %.4f %.4f %.4f diff %.2g\n", p.source->size(),
+                  layer.nonzero.size(), radius, "-", td, tf, dm * 1e-6, fm * 1e-6, maxdiff);
+      ++total;
+      agree += (dm < fm) == (td < tf);
+      t_direct += td;
+      t_fft += tf;
+      t_auto += dm < fm ? td : tf;
+    }
+  }
+  std::printf(
+      "model picks the faster path in %d of %d cases; total ms: direct %.1f fft %.1f auto %.1f "
+      "best %s\n",
+      agree, total, t_direct, t_fft, t_auto, "-");
   return 0;
 }
 
@@ -480,11 +660,88 @@ void BM_SurfaceDensity(benchmark::State& state) {
 }
 BENCHMARK(BM_SurfaceDensity)->Unit(benchmark::kMicrosecond);
 
+/** The MoverTracker's call pattern (include/pcl_movers/impl/mover_tracker.hpp,
+ * registerCandidate): one registration object reused for every (track, candidate) pair; per
+ * call the candidate (≤ 100 points) as source, the track's accumulated 29×29×7 model as target
+ * density, the full setter sequence, align() with a translation-only guess, then a copy of the
+ * view density. Candidates are registered against several models in turn, as in a frame. */
+void BM_TrackerPattern(benchmark::State& state) {
+  struct Case {
+    pcl::PointCloud<pcl::PointXYZ>::Ptr candidate;
+    pcl_movers::SurfaceDensity::Ptr model;
+    Eigen::Vector3f sensor;
+    Eigen::Vector2f predicted;
+  };
+  static const std::vector<Case> cases = [] {
+    std::vector<Case> out;
+    const auto pairs = pcl_movers::eval::makeSimulatedPairs(24, 21);
+    for (const auto& p : pairs) {
+      Case c;
+      // Candidate: the tracker subsamples clusters to max_registration_points = 100.
+      c.candidate = pcl::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
+      const double stride = std::max(1.0, static_cast<double>(p.source->size()) / 100.0);
+      for (double k = 0; k < p.source->size(); k += stride)
+        c.candidate->push_back((*p.source)[static_cast<std::size_t>(k)]);
+      c.sensor = p.source->sensor_origin_.head<3>();
+      Eigen::Vector4f centroid;
+      pcl::compute3DCentroid(*p.target, centroid);
+      c.model = pcl::make_shared<pcl_movers::SurfaceDensity>();
+      c.model->compute(*p.target, p.target->sensor_origin_.head<3>(), centroid.head<3>());
+      // An accumulated model: a second, slightly shifted view blended in with half-life 5.
+      pcl_movers::SurfaceDensity view = *c.model;
+      view.compute(*p.target, p.target->sensor_origin_.head<3>(),
+                   centroid.head<3>() + Eigen::Vector3f(0.05f, -0.03f, 0.f));
+      c.model->accumulate(view, pcl_movers::SurfaceDensity::halfLifeWeight(5.f));
+      const Eigen::Vector4f ref(p.reference.x(), p.reference.y(), p.reference.z(), 1.f);
+      c.predicted = (ref.head<3>() + Eigen::Vector3f(0.3f, -0.2f, 0.f)).head<2>();
+      out.push_back(c);
+    }
+    return out;
+  }();
+  pcl_movers::BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ> reg;
+  const float radii[] = {1.2f, 2.0f, 4.0f};
+  std::size_t i = 0;
+  for (auto _ : state) {
+    // Each candidate against three models (its own and two others), like gated pairs in a frame.
+    const Case& cand = cases[(i / 3) % cases.size()];
+    const Case& track = cases[((i / 3) + (i % 3) * 7) % cases.size()];
+    const float radius = radii[i % 3];
+    ++i;
+    reg.setInputSource(cand.candidate);
+    reg.setTargetDensity(track.model);
+    reg.setSensorOrigin(cand.sensor);
+    reg.setResolution(0.2f);
+    reg.setSearchRadius(radius);
+    reg.setYawSamples(1);
+    reg.setSigmaPerMetre(0.005f);
+    reg.setMinSigma(0.1f);
+    reg.setMinSimilarity(0.3f);
+    const Eigen::Vector3f centre = track.model->getCentre();
+    Eigen::Matrix4f guess = Eigen::Matrix4f::Identity();
+    guess(0, 3) = centre.x() - cand.predicted.x();
+    guess(1, 3) = centre.y() - cand.predicted.y();
+    pcl::PointCloud<pcl::PointXYZ> aligned;
+    reg.align(aligned, guess);
+    const auto view = reg.getSourceDensity();
+    pcl_movers::SurfaceDensity::Ptr copy;
+    if (view) copy.reset(new pcl_movers::SurfaceDensity(*view));
+    benchmark::DoNotOptimize(copy.get());
+  }
+}
+BENCHMARK(BM_TrackerPattern)->Unit(benchmark::kMicrosecond);
+
 }  // namespace
 
 int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i)
-    if (std::strcmp(argv[i], "--report") == 0) return report();
+    if (std::strcmp(argv[i], "--report") == 0)
+      return report();
+    else if (std::strcmp(argv[i], "--calibrate") == 0)
+      return calibrate();
+    else if (std::strcmp(argv[i], "--probe") == 0)
+      return probe(std::atoi(argv[i + 1]));
+    else if (std::strcmp(argv[i], "--failures") == 0)
+      return failures(i + 1 < argc ? argv[i + 1] : nullptr);
   pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
   benchmark::Initialize(&argc, argv);
   benchmark::RunSpecifiedBenchmarks();

@@ -5,6 +5,7 @@
 #include <pcl_movers/impl/surface_density.hpp>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -12,6 +13,19 @@
 namespace pcl_movers {
 
 namespace {
+
+/** erf to ~1.5e-7 absolute (Abramowitz & Stegun 7.1.26), well below float resolution of the
+ * cell weights, about twice as fast as std::erf: the density build calls it ~15 times per
+ * point and was a fifth of a tracker registration's time. */
+inline float fastErf(float x) {
+  const float ax = std::abs(x);
+  const float t = 1.f / (1.f + 0.3275911f * ax);
+  const float poly =
+      t * (0.254829592f +
+           t * (-0.284496736f + t * (1.421413741f + t * (-1.453152027f + t * 1.061405429f))));
+  const float y = 1.f - poly * std::exp(-ax * ax);
+  return x < 0.f ? -y : y;
+}
 
 /** Weights of a 1D Gaussian (mean `mean`, σ `sigma`) integrated over the cells [first, last] of an
  * axis whose cell 0 starts at `origin`, cell size `cell`. The window is ±3σ (at least the cell
@@ -30,12 +44,12 @@ void axisWeights(float mean, float sigma, float origin, float cell, int n, AxisW
   const int hi = static_cast<int>(std::floor(u + reach));
   const float inv = 1.f / (std::sqrt(2.f) * sigma);
   float total = 0.f;
-  float prev = std::erf((lo * cell + origin - mean) * inv);
+  float prev = fastErf((lo * cell + origin - mean) * inv);
   // Weights of the whole window first, to normalise; then keep the part inside [0, n).
   thread_local std::vector<float> window;
   window.resize(static_cast<std::size_t>(hi - lo + 1));
   for (int i = lo; i <= hi; ++i) {
-    const float next = std::erf(((i + 1) * cell + origin - mean) * inv);
+    const float next = fastErf(((i + 1) * cell + origin - mean) * inv);
     const float wi = 0.5f * (next - prev);
     window[static_cast<std::size_t>(i - lo)] = wi;
     total += wi;
@@ -52,6 +66,11 @@ void axisWeights(float mean, float sigma, float origin, float cell, int n, AxisW
 
 }  // namespace
 
+std::uint64_t SurfaceDensity::nextRevision() {
+  static std::atomic<std::uint64_t> counter{0};
+  return ++counter;
+}
+
 void SurfaceDensity::resize(int nx, int ny, int nz) {
   if (nx < 1 || ny < 1 || nz < 1)
     throw std::invalid_argument("SurfaceDensity: grid size must be at least 1x1x1, got " +
@@ -62,14 +81,18 @@ void SurfaceDensity::resize(int nx, int ny, int nz) {
   nz_ = nz;
   data_.assign(static_cast<std::size_t>(nx) * ny * nz, 0.f);
   sqrt_.assign(data_.size(), 0.f);
+  revision_ = nextRevision();
 }
 
 void SurfaceDensity::clear() {
   std::fill(data_.begin(), data_.end(), 0.f);
   std::fill(sqrt_.begin(), sqrt_.end(), 0.f);
+  revision_ = nextRevision();
 }
 
 void SurfaceDensity::updateSqrt() {
+  // Every change of the values ends here: a new revision for caches keyed on the content.
+  revision_ = nextRevision();
   sqrt_.resize(data_.size());
   for (std::size_t i = 0; i < data_.size(); ++i) sqrt_[i] = std::sqrt(data_[i]);
 }

@@ -349,3 +349,157 @@ TEST(BhattacharyaRegistration, RealKittiPairs) {
   }
   EXPECT_GE(ok, static_cast<int>(pairs.size()) - 1);
 }
+
+namespace {
+using Method = BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ>::CorrelationMethod;
+}  // namespace
+
+TEST(BhattacharyaRegistration, FftAndDirectGiveTheSameSurface) {
+  // A near vehicle (many non-zero cells) and a far sparse one, with and without z search and yaw
+  // layers: the two correlation paths must agree sample by sample.
+  const Eigen::Vector3f sensor(0.f, 0.f, 1.73f);
+  struct Setup {
+    float x, radius;
+    bool z;
+    int yaws;
+  };
+  for (const Setup& s :
+       {Setup{12.f, 3.2f, false, 1}, Setup{45.f, 1.4f, true, 3}, Setup{20.f, 2.0f, false, 5}}) {
+    auto target = vehicle(s.x, 2.f, 0.4f, sensor, 0.f, 3);
+    auto source = vehicle(s.x + 0.63f, 2.21f, 0.45f, sensor + Eigen::Vector3f(0.5f, 0, 0), 0.4f, 4);
+    pcl::PointCloud<pcl::PointXYZ> out;
+    std::vector<float> surfaces[2];
+    Eigen::Matrix4f results[2];
+    for (int m = 0; m < 2; ++m) {
+      BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ> reg;
+      reg.setCorrelationMethod(m == 0 ? Method::Direct : Method::FFT);
+      reg.setSearchRadius(s.radius);
+      reg.setSearchZ(s.z);
+      reg.setYawSamples(s.yaws);
+      reg.setFullYawWindow(true);
+      reg.setInputSource(source);
+      reg.setInputTarget(target);
+      reg.align(out);
+      ASSERT_TRUE(reg.hasConverged());
+      EXPECT_EQ(reg.getLastCorrelationMethod(), m == 0 ? Method::Direct : Method::FFT);
+      surfaces[m] = reg.getSimilaritySurface().values;
+      results[m] = reg.getFinalTransformation();
+    }
+    ASSERT_EQ(surfaces[0].size(), surfaces[1].size());
+    float worst = 0.f, peak = 0.f;
+    for (std::size_t i = 0; i < surfaces[0].size(); ++i) {
+      worst = std::max(worst, std::abs(surfaces[0][i] - surfaces[1][i]));
+      peak = std::max(peak, surfaces[0][i]);
+    }
+    EXPECT_GT(peak, 0.5f);
+    EXPECT_LT(worst, 1e-4f) << "at x = " << s.x;
+    EXPECT_LT((results[0] - results[1]).cwiseAbs().maxCoeff(), 1e-3f);
+  }
+}
+
+TEST(BhattacharyaRegistration, SubCellAccuracyWithBothPathsAndReCentring) {
+  const Eigen::Vector3f sensor(0.f, 0.f, 1.73f);
+  auto target = vehicle(18.f, 3.f, -0.3f, sensor, 0.f, 5);
+  const std::vector<Eigen::Vector2f> motions = {{0.13f, -0.29f}, {1.07f, 0.51f}, {-0.71f, 1.33f}};
+  for (const Method method : {Method::Direct, Method::FFT})
+    for (std::size_t i = 0; i < motions.size(); ++i) {
+      const Eigen::Vector2f m = motions[i];
+      auto source = vehicle(18.f + m.x(), 3.f + m.y(), -0.3f, sensor + Eigen::Vector3f(0.9f, 0, 0),
+                            0.29f * (i + 1), 10 + i);
+      BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ> reg;
+      reg.setCorrelationMethod(method);
+      reg.setSearchRadius(2.f);
+      reg.setInputSource(source);
+      reg.setInputTarget(target);
+      pcl::PointCloud<pcl::PointXYZ> out;
+      reg.align(out);
+      ASSERT_TRUE(reg.hasConverged());
+      const Eigen::Vector3f t = reg.getFinalTransformation().block<3, 1>(0, 3);
+      EXPECT_LT((t.head<2>() + m).norm(), 0.07f) << "motion " << i;
+    }
+}
+
+TEST(BhattacharyaRegistration, ReusedObjectAndChangedModelGiveFreshResults) {
+  // The tracker pattern: one object, target densities that change in place between calls
+  // (accumulate) and a changing search radius. Cached target data must follow the content.
+  const Eigen::Vector3f sensor(0.f, 0.f, 1.73f);
+  auto a = vehicle(16.f, 1.f, 0.2f, sensor, 0.f, 1);
+  auto b = vehicle(16.8f, 1.3f, 0.2f, sensor, 0.5f, 2);
+  Eigen::Vector4f ca;
+  pcl::compute3DCentroid(*a, ca);
+  auto model = pcl::make_shared<pcl_movers::SurfaceDensity>();
+  model->compute(*a, sensor, ca.head<3>());
+  BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ> reg;
+  reg.setCorrelationMethod(Method::FFT);  // the path with the cached target spectra
+  pcl::PointCloud<pcl::PointXYZ> out;
+  for (float radius : {2.f, 1.4f, 3.f}) {
+    reg.setInputSource(b);
+    reg.setTargetDensity(model);
+    reg.setSearchRadius(radius);
+    reg.align(out);
+    ASSERT_TRUE(reg.hasConverged()) << radius;
+    const Eigen::Vector3f t = reg.getFinalTransformation().block<3, 1>(0, 3);
+    EXPECT_LT((t.head<2>() - Eigen::Vector2f(-0.8f, -0.3f)).norm(), 0.1f) << radius;
+  }
+  // The model now holds the moved object: the same call must follow it (a stale spectrum would
+  // still report the old motion).
+  const std::uint64_t before = model->revision();
+  model->compute(*b, sensor, ca.head<3>());
+  EXPECT_NE(model->revision(), before);
+  reg.setInputSource(b);
+  reg.align(out);
+  ASSERT_TRUE(reg.hasConverged());
+  EXPECT_LT((reg.getFinalTransformation().block<2, 1>(0, 3).norm()), 0.06f);
+  EXPECT_GT(reg.getSimilarity(), 0.9f);
+}
+
+TEST(BhattacharyaRegistration, DegenerateInputsWithEitherPathAndMixedTypes) {
+  const Eigen::Vector3f sensor(0.f, 0.f, 1.73f);
+  auto good = vehicle(15.f, 0.f, 0.f, sensor, 0.f, 1);
+  pcl::PointCloud<pcl::PointXYZI>::Ptr good_i(new pcl::PointCloud<pcl::PointXYZI>);
+  for (const auto& p : *good) {
+    pcl::PointXYZI q;
+    q.x = p.x + 0.3f;
+    q.y = p.y;
+    q.z = p.z;
+    q.intensity = 1.f;
+    good_i->push_back(q);
+  }
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  pcl::PointCloud<pcl::PointXYZI>::Ptr empty(new pcl::PointCloud<pcl::PointXYZI>);
+  pcl::PointCloud<pcl::PointXYZI>::Ptr nans(new pcl::PointCloud<pcl::PointXYZI>);
+  pcl::PointCloud<pcl::PointXYZI>::Ptr one(new pcl::PointCloud<pcl::PointXYZI>);
+  pcl::PointXYZI q;
+  q.x = q.y = q.z = nan;
+  nans->push_back(q);
+  nans->push_back(q);
+  q.x = 15.f;
+  q.y = 0.f;
+  q.z = 1.f;
+  one->push_back(q);
+  using Reg = BhattacharyaRegistration<pcl::PointXYZI, pcl::PointXYZ>;
+  for (const auto method : {Reg::CorrelationMethod::Direct, Reg::CorrelationMethod::FFT}) {
+    Reg reg;
+    reg.setCorrelationMethod(method);
+    pcl::PointCloud<pcl::PointXYZI> out;
+    reg.setInputTarget(good);
+    reg.setInputSource(good_i);  // XYZI source, XYZ target, 0.3 m apart
+    reg.align(out);
+    ASSERT_TRUE(reg.hasConverged());
+    EXPECT_NEAR(reg.getFinalTransformation()(0, 3), -0.3f, 0.05f);
+    EXPECT_EQ(out.size(), good_i->size());
+    for (const auto& bad : {empty, nans, one}) {
+      reg.setInputSource(bad);
+      reg.align(out);
+      EXPECT_FALSE(reg.hasConverged()) << bad->size() << " source points";
+      EXPECT_EQ(reg.getSimilarity(), 0.f);
+      EXPECT_FALSE(reg.getSourceDensity());
+    }
+    // A non-finite guess is refused, not propagated.
+    reg.setInputSource(good_i);
+    Eigen::Matrix4f guess = Eigen::Matrix4f::Identity();
+    guess(0, 3) = nan;
+    reg.align(out, guess);
+    EXPECT_FALSE(reg.hasConverged());
+  }
+}

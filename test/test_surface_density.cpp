@@ -174,3 +174,21 @@ TEST(SurfaceDensity, TranslateAndShift) {
                                           }()),
             0.95f);
 }
+
+TEST(SurfaceDensity, RevisionFollowsTheContent) {
+  pcl_movers::SurfaceDensity d;
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  cloud.push_back(pcl::PointXYZ(10.f, 0.f, 1.f));
+  d.compute(cloud, Eigen::Vector3f::Zero(), Eigen::Vector3f(10.f, 0.f, 1.f));
+  const std::uint64_t r0 = d.revision();
+  const pcl_movers::SurfaceDensity copy = d;
+  EXPECT_EQ(copy.revision(), r0);  // same content
+  d.translate(Eigen::Vector3f(1.f, 0.f, 0.f));
+  EXPECT_EQ(d.revision(), r0);  // the grid moved, the values did not
+  d.accumulate(copy, 0.5f);
+  const std::uint64_t r1 = d.revision();
+  EXPECT_NE(r1, r0);
+  d.clear();
+  EXPECT_NE(d.revision(), r1);
+  EXPECT_NE(d.shifted(Eigen::Vector3f(0.1f, 0.f, 0.f)).revision(), copy.revision());
+}

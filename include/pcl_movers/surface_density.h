@@ -11,6 +11,7 @@
 
 #include <Eigen/Core>
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 namespace pcl_movers {
@@ -69,6 +70,12 @@ class SurfaceDensity {
   /** \brief Lower bound on σ [m] (default 0.1): keeps near points from becoming spikes. */
   void setMinSigma(float min_sigma) { min_sigma_ = min_sigma; }
   float getMinSigma() const { return min_sigma_; }
+
+  /** \brief Identifies the content (values and grid size): a new value, unique in the process,
+   * after every change of the values; copies share it with their original (same content).
+   * Moving the grid (translate(), setCentre()) keeps it. Lets users cache what they derive from
+   * the values (BhattacharyaRegistration caches the target's spectra and non-zero cells). */
+  std::uint64_t revision() const { return revision_; }
 
   /** \brief World point at the middle of the grid. */
   void setCentre(const Eigen::Vector3f& centre) { centre_ = centre; }
@@ -138,6 +145,7 @@ class SurfaceDensity {
  private:
   void resize(int nx, int ny, int nz);
   void updateSqrt();
+  static std::uint64_t nextRevision();
 
   int nx_ = 0, ny_ = 0, nz_ = 0;
   float resolution_ = 0.2f;
@@ -147,6 +155,7 @@ class SurfaceDensity {
   Eigen::Vector3f centre_ = Eigen::Vector3f::Zero();
   std::vector<float> data_;
   std::vector<float> sqrt_;
+  std::uint64_t revision_ = 0;
 };
 
 }  // namespace pcl_movers

@@ -26,6 +26,53 @@ namespace detail {
 void refinePeak(int dims, const bool* active, const std::function<float(const int*)>& sample,
                 float* offsets, float* value);
 
+/** \brief One source density (one yaw layer) on a tight grid of the target's lattice. */
+struct SourceLayer {
+  SurfaceDensity density{1, 1, 1, 0.2f, 0.4f};
+  int ox = 0, oy = 0, oz = 0;  ///< target-lattice index of the tight grid's cell (0, 0, 0)
+  std::vector<int> nonzero;    ///< indices of the cells with sqrt(ρ) > 0
+};
+
+/** \brief Everything align() reuses between calls: point buffers, source layers, score arrays,
+ * the density built from a target cloud, FFT plans and the target's cached spectra. */
+struct BhattacharyaWorkspace {
+  std::vector<Eigen::Vector3f> points, turned;
+  std::vector<float> sigmas;
+  std::vector<SourceLayer> layers;
+  SourceLayer refine[3];
+  std::vector<float> scores, block, local;
+  // Density of the target cloud (when no target density is set) and what it was built from.
+  SurfaceDensity own_target{1, 1, 1, 0.2f, 0.4f};
+  bool own_target_valid = false;
+  const void* own_target_cloud = nullptr;
+  std::vector<float> own_target_key;
+  // FFT state (defined in src/bhattacharya_registration.cpp, opaque here).
+  struct Fft;
+  std::shared_ptr<Fft> fft;
+};
+
+/** \brief Builds `layer` from points already moved (guess, yaw, shift) on the lattice of
+ * `target`, clipped to the cells that can overlap the target for shifts of ±nr (±nrz) cells. */
+void buildSourceLayer(SourceLayer& layer, const std::vector<Eigen::Vector3f>& points,
+                      const std::vector<float>& sigmas, const SurfaceDensity& target, int nr,
+                      int nrz);
+
+/** \brief B(d) = Σ_j sqrt(S[j])·sqrt(T[j + o + d]) for d in [dx0,dx1]×[dy0,dy1]×[dz0,dz1],
+ * summed directly over the non-zero source cells; out[((dz-dz0)·h + dy-dy0)·w + dx-dx0]. */
+void correlateDirect(const SurfaceDensity& target, const SourceLayer& src, int dx0, int dx1,
+                     int dy0, int dy1, int dz0, int dz1, float* out);
+
+/** \brief Same over the whole window d ∈ [-nr,nr]² × [-nrz,nrz] by FFT (per-slice spectra,
+ * summed over slices before one inverse transform per z shift); the target's spectra are cached
+ * in `work` by SurfaceDensity::revision(). */
+void correlateFft(BhattacharyaWorkspace& work, const SurfaceDensity& target, const SourceLayer& src,
+                  int nr, int nrz, float* out);
+
+/** \brief Cost-model estimates (same unit, ~ns on the machine measured) of the two paths. */
+double directCost(const SurfaceDensity& target, const SourceLayer& src, int nr, int nrz);
+double fftCost(const BhattacharyaWorkspace& work, const SurfaceDensity& target,
+               const SourceLayer& src, int nr, int nrz);
+
 }  // namespace detail
 
 template <typename PointSource, typename PointTarget, typename Scalar>
@@ -34,6 +81,7 @@ BhattacharyaRegistration<PointSource, PointTarget, Scalar>::BhattacharyaRegistra
   // No kd-tree is ever needed: stop pcl::Registration::initCompute() from building one.
   this->force_no_recompute_ = true;
   this->force_no_recompute_reciprocal_ = true;
+  work_ = std::make_shared<detail::BhattacharyaWorkspace>();
 }
 
 template <typename PointSource, typename PointTarget, typename Scalar>
@@ -94,15 +142,32 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::align(PointClou
 }
 
 template <typename PointSource, typename PointTarget, typename Scalar>
-bool BhattacharyaRegistration<PointSource, PointTarget, Scalar>::buildTargetDensity(
-    SurfaceDensity& target) const {
-  if (target_density_) {
-    target = *target_density_;
-    return !target.empty();
-  }
-  if (!target_) return false;
+const SurfaceDensity* BhattacharyaRegistration<PointSource, PointTarget, Scalar>::targetDensity() {
+  if (target_density_) return target_density_->empty() ? nullptr : target_density_.get();
+  if (!target_) return nullptr;
+  detail::BhattacharyaWorkspace& w = *work_;
   const Eigen::Vector3f origin =
       use_sensor_origin_ ? sensor_origin_ : target_->sensor_origin_.template head<3>();
+  const std::vector<float> key = {static_cast<float>(nx_),
+                                  static_cast<float>(ny_),
+                                  static_cast<float>(nz_),
+                                  resolution_,
+                                  grid_height_,
+                                  sigma_per_metre_,
+                                  min_sigma_,
+                                  origin.x(),
+                                  origin.y(),
+                                  origin.z(),
+                                  static_cast<float>(target_->size())};
+  // The same target cloud registered against many sources (or the same call repeated) reuses
+  // its density; setInputTarget() always invalidates it.
+  if (w.own_target_valid && !this->target_cloud_updated_ && w.own_target_cloud == target_.get() &&
+      w.own_target_key == key)
+    return w.own_target.empty() ? nullptr : &w.own_target;
+  this->target_cloud_updated_ = false;
+  w.own_target_cloud = target_.get();
+  w.own_target_key = key;
+  w.own_target_valid = true;
   // Grid centred on the middle of the target's bounding box (not its centroid, which leans
   // towards the sensor because only the near faces are sampled): the object fits best that way.
   Eigen::Vector3f lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
@@ -115,15 +180,18 @@ bool BhattacharyaRegistration<PointSource, PointTarget, Scalar>::buildTargetDens
     hi = hi.cwiseMax(v);
     ++n;
   }
-  if (n < 2) return false;
-  const Eigen::Vector3f centroid = 0.5f * (lo + hi);
+  SurfaceDensity& target = w.own_target;
+  if (n < 2) {
+    target.clear();
+    return nullptr;
+  }
   target.setGridSize(nx_, ny_, nz_);
   target.setResolution(resolution_);
   target.setResolutionZ(grid_height_ / static_cast<float>(nz_));
   target.setSigmaPerMetre(sigma_per_metre_);
   target.setMinSigma(min_sigma_);
-  target.compute(*target_, origin, centroid);
-  return !target.empty();
+  target.compute(*target_, origin, Eigen::Vector3f(0.5f * (lo + hi)));
+  return target.empty() ? nullptr : &target;
 }
 
 template <typename PointSource, typename PointTarget, typename Scalar>
@@ -131,46 +199,58 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::computeTransfor
     PointCloudSource& output, const Matrix4& guess) {
   converged_ = false;
   similarity_ = 0.f;
-  surface_ = SimilaritySurface();
-  source_density_.reset();
+  surface_.nx = surface_.ny = 0;
+  surface_.yaws.clear();
+  surface_.values.clear();
   const Eigen::Matrix4f guess_f = guess.template cast<float>();
   final_transformation_ = transformation_ = guess;
+  bool keep_source_density = false;
 
   auto finish = [&]() {
+    if (!keep_source_density) source_density_.reset();
     if (output.size() > 0) pcl::transformPointCloud(output, output, final_transformation_);
   };
   if (!(resolution_ > 0.f) || !(search_radius_ > 0.f) || nx_ < 1 || ny_ < 1 || nz_ < 1 ||
-      !(grid_height_ > 0.f) || yaw_samples_ < 1) {
+      !(grid_height_ > 0.f) || yaw_samples_ < 1 || !std::isfinite(search_radius_) ||
+      search_radius_ / resolution_ > 1000.f) {
     PCL_ERROR("[pcl_movers::%s] invalid parameters (resolution, radius, grid or yaw samples)\n",
               reg_name_.c_str());
     finish();
     return;
   }
-
-  // ---- target density (the "model")
-  SurfaceDensity target;
-  if (!buildTargetDensity(target)) {
+  if (!guess_f.allFinite()) {
+    PCL_ERROR("[pcl_movers::%s] the initial guess is not finite\n", reg_name_.c_str());
     finish();
     return;
   }
-  const int nx = target.getNx(), ny = target.getNy(), nz = target.getNz();
+  detail::BhattacharyaWorkspace& w = *work_;
+
+  // ---- target density (the "model")
+  const SurfaceDensity* target_ptr = targetDensity();
+  if (!target_ptr) {
+    finish();
+    return;
+  }
+  const SurfaceDensity& target = *target_ptr;
   const float res = target.getResolution(), res_z = target.getResolutionZ();
 
   // ---- source points after the guess; σ from the untransformed ranges
   const Eigen::Vector3f src_origin =
       use_sensor_origin_ ? sensor_origin_ : input_->sensor_origin_.template head<3>();
-  std::vector<Eigen::Vector3f> points;
-  std::vector<float> sigmas;
-  points.reserve(indices_->size());
-  sigmas.reserve(indices_->size());
+  std::vector<Eigen::Vector3f>& points = w.points;
+  std::vector<float>& sigmas = w.sigmas;
+  points.clear();
+  sigmas.clear();
   const Eigen::Matrix3f guess_r = guess_f.template topLeftCorner<3, 3>();
   const Eigen::Vector3f guess_t = guess_f.template topRightCorner<3, 1>();
   for (const auto idx : *indices_) {
     const auto& p = (*input_)[idx];
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
     const Eigen::Vector3f v(p.x, p.y, p.z);
+    const float sigma = std::max(min_sigma_, sigma_per_metre_ * (v - src_origin).norm());
+    if (!(sigma > 0.f) || !std::isfinite(sigma)) continue;
     points.push_back(guess_r * v + guess_t);
-    sigmas.push_back(std::max(min_sigma_, sigma_per_metre_ * (v - src_origin).norm()));
+    sigmas.push_back(sigma);
   }
   if (points.size() < 2) {
     finish();
@@ -179,159 +259,187 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::computeTransfor
   Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
   for (const auto& p : points) centroid += p;
   centroid /= static_cast<float>(points.size());
+  std::vector<Eigen::Vector3f>& turned = w.turned;
+  turned.resize(points.size());
 
-  // ---- search window: translations of ±nr cells (±nrz in z) around the guess
+  // ---- search window: translations d of ±nr cells (±nrz in z) around the guess
   const int nr = std::max(1, static_cast<int>(std::ceil(search_radius_ / res - 1e-4f)));
   const int nrz =
       search_z_ ? std::max(1, static_cast<int>(std::ceil(search_radius_z_ / res_z - 1e-4f))) : 0;
   const int wx = 2 * nr + 1, wz = 2 * nrz + 1;
   const int layers = yaw_samples_ % 2 == 1 ? yaw_samples_ : yaw_samples_ + 1;
-  // The source density lives on the target's lattice padded by the window, so every shifted
-  // source cell that overlaps the target grid is available.
-  SurfaceDensity padded(nx + 2 * nr, ny + 2 * nr, nz + 2 * nrz, res, res_z);
-  const int pnx = nx + 2 * nr, pny = ny + 2 * nr;
+  const int mid = (layers - 1) / 2;
+  if (static_cast<int>(w.layers.size()) < layers) w.layers.resize(static_cast<std::size_t>(layers));
 
-  // Non-zero target cells: the correlation only needs those (objects are surfaces, so most of
-  // the grid is empty).
-  const std::vector<float>& st = target.sqrtValues();
-  std::vector<int> nz_cells;
-  nz_cells.reserve(st.size());
-  for (int i = 0; i < static_cast<int>(st.size()); ++i)
-    if (st[i] > 1e-7f) nz_cells.push_back(i);
-
-  // scores[((l * wz + ez) * wx + ey) * wx + ex], e = nr - d (d = translation in cells);
-  // -1 marks a translation not evaluated.
-  std::vector<float> scores(static_cast<std::size_t>(layers) * wz * wx * wx, -1.f);
-  std::vector<std::vector<float>> layer_sqrt(static_cast<std::size_t>(layers));
-  std::vector<Eigen::Vector3f> turned(points.size());
-  auto buildLayer = [&](int l) {
-    const float yaw = (l - (layers - 1) / 2) * yaw_step_;
+  // Moves the source (after the guess) by yaw ψ about its centroid, then by `shift`.
+  auto place = [&](float yaw, const Eigen::Vector3f& shift) {
     const Eigen::Matrix3f rz = Eigen::AngleAxisf(yaw, Eigen::Vector3f::UnitZ()).toRotationMatrix();
     for (std::size_t i = 0; i < points.size(); ++i)
-      turned[i] = rz * (points[i] - centroid) + centroid;
-    padded.computeFromPoints(turned, sigmas, target.getCentre());
-    layer_sqrt[static_cast<std::size_t>(l)] = padded.sqrtValues();
+      turned[i] = rz * (points[i] - centroid) + centroid + shift;
   };
-  // B(d) = Σ_i sqrtT[i] · sqrtP[i + nr - d] over a block of translations (all z shifts); with
-  // e = nr - d the inner loop runs forward over a contiguous row of the padded grid. Direct
-  // summation over the non-zero target cells only.
-  std::vector<float> block;
-  auto correlate = [&](int l, int ex0, int ex1, int ey0, int ey1) {
-    ex0 = std::max(ex0, 0);
-    ey0 = std::max(ey0, 0);
-    ex1 = std::min(ex1, wx - 1);
-    ey1 = std::min(ey1, wx - 1);
-    if (ex1 < ex0 || ey1 < ey0) return;
-    const int bw = ex1 - ex0 + 1, bh = ey1 - ey0 + 1;
-    block.assign(static_cast<std::size_t>(wz) * bh * bw, 0.f);
-    const std::vector<float>& sp = layer_sqrt[static_cast<std::size_t>(l)];
-    for (const int cell : nz_cells) {
-      const int ix = cell % nx;
-      const int iy = (cell / nx) % ny;
-      const int iz = cell / (nx * ny);
-      const float v = st[static_cast<std::size_t>(cell)];
-      for (int ez = 0; ez < wz; ++ez) {
-        const int pz = iz + ez;
-        for (int ey = ey0; ey <= ey1; ++ey) {
-          const float* prow = &sp[(static_cast<std::size_t>(pz) * pny + (iy + ey)) * pnx +
-                                  static_cast<std::size_t>(ix + ex0)];
-          float* orow = &block[(static_cast<std::size_t>(ez) * bh + (ey - ey0)) * bw];
-          for (int k = 0; k < bw; ++k) orow[k] += v * prow[k];
-        }
-      }
-    }
-    for (int ez = 0; ez < wz; ++ez)
-      for (int ey = ey0; ey <= ey1; ++ey)
-        for (int ex = ex0; ex <= ex1; ++ex)
-          scores[((static_cast<std::size_t>(l) * wz + ez) * wx + ey) * wx + ex] =
-              block[(static_cast<std::size_t>(ez) * bh + (ey - ey0)) * bw + (ex - ex0)];
+  for (int l = 0; l < layers; ++l) {
+    place(static_cast<float>(l - mid) * yaw_step_, Eigen::Vector3f::Zero());
+    detail::buildSourceLayer(w.layers[static_cast<std::size_t>(l)], turned, sigmas, target, nr,
+                             nrz);
+  }
+
+  // scores[((l·wz + dz+nrz)·wx + dy+nr)·wx + dx+nr] = B(d) of layer l; -1: not evaluated.
+  std::vector<float>& scores = w.scores;
+  scores.assign(static_cast<std::size_t>(layers) * wz * wx * wx, -1.f);
+  auto at = [&](int l, int dz, int dy, int dx) -> float& {
+    return scores[((static_cast<std::size_t>(l) * wz + (dz + nrz)) * wx + (dy + nr)) * wx +
+                  (dx + nr)];
   };
-  auto at = [&](int l, int ez, int ey, int ex) {
-    return scores[((static_cast<std::size_t>(l) * wz + ez) * wx + ey) * wx + ex];
+  auto correlateBlock = [&](int l, int dx0, int dx1, int dy0, int dy1) {
+    dx0 = std::max(dx0, -nr);
+    dy0 = std::max(dy0, -nr);
+    dx1 = std::min(dx1, nr);
+    dy1 = std::min(dy1, nr);
+    if (dx1 < dx0 || dy1 < dy0) return;
+    const int bw = dx1 - dx0 + 1, bh = dy1 - dy0 + 1;
+    w.block.assign(static_cast<std::size_t>(wz) * bh * bw, 0.f);
+    detail::correlateDirect(target, w.layers[static_cast<std::size_t>(l)], dx0, dx1, dy0, dy1, -nrz,
+                            nrz, w.block.data());
+    for (int dz = -nrz; dz <= nrz; ++dz)
+      for (int dy = dy0; dy <= dy1; ++dy)
+        for (int dx = dx0; dx <= dx1; ++dx)
+          at(l, dz, dy, dx) =
+              w.block[(static_cast<std::size_t>(dz + nrz) * bh + (dy - dy0)) * bw + (dx - dx0)];
   };
-  int bl = 0, bez = 0, bey = 0, bex = 0;
+  // The whole window of the middle layer: direct sum or FFT, whichever the cost model says is
+  // cheaper (or as forced by setCorrelationMethod()).
+  {
+    const detail::SourceLayer& ml = w.layers[static_cast<std::size_t>(mid)];
+    bool use_fft = correlation_method_ == CorrelationMethod::FFT;
+    if (correlation_method_ == CorrelationMethod::Auto)
+      use_fft = detail::fftCost(w, target, ml, nr, nrz) < detail::directCost(target, ml, nr, nrz);
+    last_method_ = use_fft ? CorrelationMethod::FFT : CorrelationMethod::Direct;
+    if (use_fft)
+      detail::correlateFft(w, target, ml, nr, nrz, &at(mid, -nrz, -nr, -nr));
+    else
+      correlateBlock(mid, -nr, nr, -nr, nr);
+  }
+  int bl = 0, bdz = 0, bdy = 0, bdx = 0;
   float best = -1.f;
   auto findBest = [&]() {
     best = -1.f;
     for (int l = 0; l < layers; ++l)
-      for (int ez = 0; ez < wz; ++ez)
-        for (int ey = 0; ey < wx; ++ey)
-          for (int ex = 0; ex < wx; ++ex)
-            if (at(l, ez, ey, ex) > best) {
-              best = at(l, ez, ey, ex);
+      for (int dz = -nrz; dz <= nrz; ++dz)
+        for (int dy = -nr; dy <= nr; ++dy)
+          for (int dx = -nr; dx <= nr; ++dx)
+            if (at(l, dz, dy, dx) > best) {
+              best = at(l, dz, dy, dx);
               bl = l;
-              bez = ez;
-              bey = ey;
-              bex = ex;
+              bdz = dz;
+              bdy = dy;
+              bdx = dx;
             }
   };
-
-  // The whole window at the guess's yaw. The other yaw layers turn the source about its own
-  // centroid, which moves the peak little, so they are evaluated in a ±kLocal-cell block around
-  // the middle layer's peak (unless setFullYawWindow()), then grown by hill climbing until the
-  // best sample's neighbourhood is fully known. This makes yaw layers cost a fraction of a full
-  // correlation each.
-  const int mid = (layers - 1) / 2;
-  for (int l = 0; l < layers; ++l) buildLayer(l);
-  correlate(mid, 0, wx - 1, 0, wx - 1);
   findBest();
+  // The other yaw layers turn the source about its own centroid, which moves the peak little,
+  // so they are evaluated in a ±kLocal-cell block around the middle layer's peak (unless
+  // setFullYawWindow()), then grown by hill climbing until the best sample's neighbourhood is
+  // fully known.
   constexpr int kLocal = 4;
   for (int l = 0; l < layers; ++l) {
     if (l == mid) continue;
-    if (full_yaw_window_)
-      correlate(l, 0, wx - 1, 0, wx - 1);
-    else
-      correlate(l, bex - kLocal, bex + kLocal, bey - kLocal, bey + kLocal);
+    if (full_yaw_window_) {
+      if (last_method_ == CorrelationMethod::FFT)
+        detail::correlateFft(w, target, w.layers[static_cast<std::size_t>(l)], nr, nrz,
+                             &at(l, -nrz, -nr, -nr));
+      else
+        correlateBlock(l, -nr, nr, -nr, nr);
+    } else {
+      correlateBlock(l, bdx - kLocal, bdx + kLocal, bdy - kLocal, bdy + kLocal);
+    }
   }
   findBest();
   for (int iter = 0; iter < 4 * wx; ++iter) {
     bool grew = false;
     for (int l = std::max(0, bl - 1); l <= std::min(layers - 1, bl + 1); ++l)
-      for (int ey = std::max(0, bey - 1); ey <= std::min(wx - 1, bey + 1); ++ey)
-        for (int ex = std::max(0, bex - 1); ex <= std::min(wx - 1, bex + 1); ++ex)
-          if (at(l, 0, ey, ex) < 0.f) {
-            correlate(l, ex - 2, ex + 2, ey - 2, ey + 2);
+      for (int dy = std::max(-nr, bdy - 1); dy <= std::min(nr, bdy + 1); ++dy)
+        for (int dx = std::max(-nr, bdx - 1); dx <= std::min(nr, bdx + 1); ++dx)
+          if (at(l, -nrz, dy, dx) < 0.f) {
+            correlateBlock(l, dx - 2, dx + 2, dy - 2, dy + 2);
             grew = true;
           }
     if (!grew) break;
     findBest();
   }
 
-  // Similarity surface for callers (max over z shifts), indexed by translation d = e - nr... in
-  // increasing d, i.e. ix = nr + d = 2nr - e.
+  // Similarity surface for callers (max over z shifts), ix = nr + dx.
   surface_.nx = wx;
   surface_.ny = wx;
   surface_.resolution = res;
   surface_.yaws.resize(static_cast<std::size_t>(layers));
   surface_.values.assign(static_cast<std::size_t>(layers) * wx * wx, 0.f);
   for (int l = 0; l < layers; ++l) {
-    surface_.yaws[static_cast<std::size_t>(l)] = (l - (layers - 1) / 2) * yaw_step_;
-    for (int ey = 0; ey < wx; ++ey)
-      for (int ex = 0; ex < wx; ++ex) {
+    surface_.yaws[static_cast<std::size_t>(l)] = static_cast<float>(l - mid) * yaw_step_;
+    for (int dy = -nr; dy <= nr; ++dy)
+      for (int dx = -nr; dx <= nr; ++dx) {
         float m = 0.f;
-        for (int ez = 0; ez < wz; ++ez) m = std::max(m, at(l, ez, ey, ex));
-        surface_.values[(static_cast<std::size_t>(l) * wx + (wx - 1 - ey)) * wx + (wx - 1 - ex)] =
+        for (int dz = -nrz; dz <= nrz; ++dz) m = std::max(m, at(l, dz, dy, dx));
+        surface_.values[(static_cast<std::size_t>(l) * wx + (dy + nr)) * wx + (dx + nr)] =
             std::min(std::max(m, 0.f), 1.f);
       }
   }
 
-  const bool on_edge = bex == 0 || bex == wx - 1 || bey == 0 || bey == wx - 1 ||
-                       (nrz > 0 && (bez == 0 || bez == wz - 1));
+  const bool on_edge = bdx == -nr || bdx == nr || bdy == -nr || bdy == nr ||
+                       (nrz > 0 && (bdz == -nrz || bdz == nrz));
 
   // ---- sub-sample refinement (dims: x, y, z, yaw)
-  const bool active[4] = {bex > 0 && bex<wx - 1, bey> 0 && bey<wx - 1, nrz> 0 && bez > 0 &&
-                          bez<wz - 1, layers> 1 && bl > 0 && bl < layers - 1};
+  const bool active[4] = {bdx > -nr && bdx<nr, bdy> - nr && bdy<nr, nrz> 0 && bdz > -nrz &&
+                          bdz<nrz, layers> 1 && bl > 0 && bl < layers - 1};
   float offs[4] = {0.f, 0.f, 0.f, 0.f};
   float value = best;
   detail::refinePeak(
-      4, active, [&](const int* o) { return at(bl + o[3], bez + o[2], bey + o[1], bex + o[0]); },
+      4, active, [&](const int* o) { return at(bl + o[3], bdz + o[2], bdy + o[1], bdx + o[0]); },
       offs, &value);
   value = std::min(std::max(value, best), 1.f);
+  float dx = static_cast<float>(bdx) + offs[0];
+  float dy = static_cast<float>(bdy) + offs[1];
+  float dz = static_cast<float>(bdz) + offs[2];
+  float yaw = (static_cast<float>(bl - mid) + offs[3]) * yaw_step_;
 
-  const float dx = static_cast<float>(nr - bex) - offs[0];
-  const float dy = static_cast<float>(nr - bey) - offs[1];
-  const float dz = static_cast<float>(nrz - bez) - offs[2];
-  const float yaw = (static_cast<float>(bl - (layers - 1) / 2) + offs[3]) * yaw_step_;
+  // ---- sub-cell re-centring: rebuild the source at the fitted motion and fit the samples
+  // around it again (symmetric samples; see setSubCellIterations()).
+  const int rl = layers > 1 ? 3 : 1;
+  const int rz = nrz > 0 ? 1 : 0;
+  for (int it = 0; it < sub_cell_iterations_ && !on_edge; ++it) {
+    w.local.assign(static_cast<std::size_t>(rl) * (2 * rz + 1) * 9, 0.f);
+    for (int k = 0; k < rl; ++k) {
+      place(yaw + static_cast<float>(k - (rl - 1) / 2) * yaw_step_,
+            Eigen::Vector3f(dx * res, dy * res, dz * res_z));
+      detail::buildSourceLayer(w.refine[k], turned, sigmas, target, 1, rz);
+      detail::correlateDirect(target, w.refine[k], -1, 1, -1, 1, -rz, rz,
+                              &w.local[static_cast<std::size_t>(k) * (2 * rz + 1) * 9]);
+    }
+    const bool act[4] = {true, true, rz > 0, rl > 1};
+    float u[4] = {0.f, 0.f, 0.f, 0.f};
+    float v = 0.f;
+    detail::refinePeak(
+        4, act,
+        [&](const int* o) {
+          return w
+              .local[((static_cast<std::size_t>(o[3] + (rl - 1) / 2) * (2 * rz + 1) + (o[2] + rz)) *
+                          3 +
+                      (o[1] + 1)) *
+                         3 +
+                     (o[0] + 1)];
+        },
+        u, &v);
+    dx += u[0];
+    dy += u[1];
+    dz += u[2];
+    yaw += u[3] * yaw_step_;
+    // As for the coarse fit: the fitted top is never below the best sample.
+    const float centre_sample =
+        w.local[((static_cast<std::size_t>((rl - 1) / 2) * (2 * rz + 1) + rz) * 3 + 1) * 3 + 1];
+    value = std::min(std::max(v, centre_sample), 1.f);
+    if (std::max(std::max(std::abs(u[0]), std::abs(u[1])),
+                 std::max(std::abs(u[2]), std::abs(u[3]))) < 0.02f)
+      break;
+  }
 
   Eigen::Affine3f motion = Eigen::Translation3f(Eigen::Vector3f(dx * res, dy * res, dz * res_z)) *
                            Eigen::Translation3f(centroid) *
@@ -343,14 +451,24 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::computeTransfor
   similarity_ = std::max(0.f, value);
   converged_ = !on_edge && similarity_ >= min_similarity_;
 
-  // Source density on the target grid after the final motion, for model accumulation.
+  // Source density on the target grid after the final motion, for model accumulation. The
+  // object is reused while nobody else holds it (the tracker copies it): no allocation per call.
   {
     const Eigen::Matrix3f r = motion.linear();
     const Eigen::Vector3f t = motion.translation();
     for (std::size_t i = 0; i < points.size(); ++i) turned[i] = r * points[i] + t;
-    auto sd = pcl::make_shared<SurfaceDensity>(target);
-    sd->computeFromPoints(turned, sigmas, target.getCentre());
-    source_density_ = sd;
+    if (!source_density_ || source_density_.use_count() > 1)
+      source_density_ = pcl::make_shared<SurfaceDensity>(target);
+    SurfaceDensity& sd = *source_density_;
+    if (sd.getNx() != target.getNx() || sd.getNy() != target.getNy() ||
+        sd.getNz() != target.getNz())
+      sd.setGridSize(target.getNx(), target.getNy(), target.getNz());
+    sd.setResolution(res);
+    sd.setResolutionZ(res_z);
+    sd.setSigmaPerMetre(target.getSigmaPerMetre());
+    sd.setMinSigma(target.getMinSigma());
+    sd.computeFromPoints(turned, sigmas, target.getCentre());
+    keep_source_density = true;
   }
   finish();
 }
