@@ -148,10 +148,34 @@ bool MoverTracker<PointT>::registerCandidate(const Track& track, Candidate& cand
 }
 
 template <typename PointT>
-void MoverTracker<PointT>::decideMover(Track& track) const {
+bool MoverTracker<PointT>::freeSpaceEvidence(Track& track,
+                                             const std::vector<Eigen::Vector3f>& points) const {
+  const auto& p = parameters_;
+  track.free_space = 0;
+  if (!free_space_map_ || p.free_space_lag <= 0) return true;  // test disabled
+  // (a) approaching / crossing: the object now fills space an earlier scan saw empty.
+  const auto ahead = free_space_map_->test(points, p.free_space_lag);
+  // (b) receding: the object's earlier surface is now seen through by the current scan.
+  FreeSpaceMap::Evidence behind;
+  if (track.past_points.size() > 1) behind = free_space_map_->test(track.past_points.front(), 0);
+  const auto score = [&](const FreeSpaceMap::Evidence& e) {
+    return e.seen_through >= p.free_space_min_points ? e.fraction() : 0.0;
+  };
+  track.free_space = std::max(score(ahead), score(behind));
+  return track.free_space >= p.free_space_min_fraction;
+}
+
+template <typename PointT>
+void MoverTracker<PointT>::decideMover(Track& track,
+                                       const std::vector<Eigen::Vector3f>& points) const {
   const auto& p = parameters_;
   track.mover = false;
-  if (track.large || track.hits < p.mover_min_age) return;
+  if (track.large) return;
+  if (track.confirmed && p.mover_latch) {
+    track.mover = true;
+    return;
+  }
+  if (track.hits < p.mover_min_age) return;
   if (track.features.height < p.min_mover_height) return;
   int votes = 0;
   for (const char f : track.fast) votes += f;
@@ -161,7 +185,10 @@ void MoverTracker<PointT>::decideMover(Track& track) const {
   const double elapsed = last.z() - first.z();
   if (elapsed <= 0) return;
   const double displacement = (last.template head<2>() - first.template head<2>()).norm();
-  track.mover = displacement >= p.displacement_ratio * p.mover_speed * elapsed;
+  if (displacement < p.displacement_ratio * p.mover_speed * elapsed) return;
+  if (!freeSpaceEvidence(track, points)) return;
+  track.mover = true;
+  track.confirmed = true;
 }
 
 template <typename PointT>
@@ -377,7 +404,19 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
       t.history.assign(
           1, Eigen::Vector3d(cand.features.centroid.x(), cand.features.centroid.y(), time));
     }
-    decideMover(t);
+    std::vector<Eigen::Vector3f> world_points;
+    if (free_space_map_ && p.free_space_lag > 0 && !t.large) {
+      ensurePoints(*cloud, clusters[m.cluster], candidates[m.cluster]);
+      const auto& pts = *candidates[m.cluster].points;
+      world_points.reserve(pts.size());
+      for (const auto& q : pts) world_points.emplace_back(q.x, q.y, q.z);
+    }
+    decideMover(t, world_points);
+    if (!world_points.empty()) {
+      t.past_points.push_back(std::move(world_points));
+      while (static_cast<int>(t.past_points.size()) > p.free_space_lag + 1)
+        t.past_points.pop_front();
+    }
     r.track_id = t.id;
     r.mover = t.mover;
     r.similarity = t.similarity;
