@@ -10,7 +10,8 @@ namespace pcl_movers {
 
 void FreeSpaceMap::setResolution(double azimuth_deg, double elevation_deg) {
   if (!(azimuth_deg > 0.01 && azimuth_deg <= 10 && elevation_deg > 0.01 && elevation_deg <= 10))
-    throw std::invalid_argument("FreeSpaceMap::setResolution: cell sizes must be in (0.01, 10] deg");
+    throw std::invalid_argument(
+        "FreeSpaceMap::setResolution: cell sizes must be in (0.01, 10] deg");
   az_res_deg_ = static_cast<float>(azimuth_deg);
   el_res_deg_ = static_cast<float>(elevation_deg);
   cols_ = static_cast<int>(std::ceil(360.0f / az_res_deg_));

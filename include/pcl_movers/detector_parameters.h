@@ -128,12 +128,18 @@ struct DetectorParameters {
   /// Fraction of the tested points that must be seen through, and at least this many points.
   double free_space_min_fraction = 0.2;
   int free_space_min_points = 3;
+  /// Tests that must pass (among the last mover_window ones) before a track is confirmed.
+  int free_space_votes = 2;
   /// Seen through = the earlier range exceeds the point's distance by max(margin,
   /// margin_per_metre · distance) [m, m/m] (range noise, pose error, beam footprint).
   double free_space_margin = 0.3;
   double free_space_margin_per_metre = 0.02;
-  /// Once confirmed, a track stays a mover while it is tracked (1) or is re-decided every update (0).
+  /// Once confirmed, a track stays a mover while it is tracked (1) or is re-decided every update
+  /// (0).
   int mover_latch = 1;
+  /// 1 = a confirmed mover whose gated candidate failed registration (low B) keeps that cluster
+  /// as its output row without an update, instead of the cluster starting a new track.
+  int hold_confirmed = 1;
 
   /** \brief Calls `f(key, member, description)` for every parameter (double, int or string). */
   template <typename F>
@@ -207,12 +213,15 @@ void DetectorParameters::forEachParameter(F&& f) {
   f("mover_votes", mover_votes, "fast updates M of the last N needed");
   f("mover_min_age", mover_min_age, "min updates of a mover track K");
   f("displacement_ratio", displacement_ratio, "min net displacement / (mover_speed * time)");
-  f("free_space_lag", free_space_lag, "free-space test against the scan this many frames ago (0 = off)");
+  f("free_space_lag", free_space_lag,
+    "free-space test against the scan this many frames ago (0 = off)");
   f("free_space_min_fraction", free_space_min_fraction, "min fraction of points seen through");
   f("free_space_min_points", free_space_min_points, "min number of points seen through");
+  f("free_space_votes", free_space_votes, "passed free-space tests needed to confirm");
   f("free_space_margin", free_space_margin, "seen-through range margin [m]");
   f("free_space_margin_per_metre", free_space_margin_per_metre, "margin per metre of distance");
   f("mover_latch", mover_latch, "1 = a confirmed mover stays a mover while tracked");
+  f("hold_confirmed", hold_confirmed, "1 = confirmed movers keep low-B clusters (no update)");
 }
 
 namespace detail {
@@ -331,9 +340,12 @@ inline void DetectorParameters::validate() const {
     throw InputError("parameter free_space_lag must be in [0, 50]");
   if (free_space_min_fraction < 0 || free_space_min_fraction > 1)
     throw InputError("parameter free_space_min_fraction must be in [0, 1]");
+  if (free_space_votes < 1) throw InputError("parameter free_space_votes must be >= 1");
   if (free_space_min_points < 1) throw InputError("parameter free_space_min_points must be >= 1");
   if (free_space_margin < 0 || free_space_margin_per_metre < 0)
     throw InputError("parameters free_space_margin(_per_metre) must be >= 0");
+  if (hold_confirmed != 0 && hold_confirmed != 1)
+    throw InputError("parameter hold_confirmed must be 0 or 1");
   if (mover_latch != 0 && mover_latch != 1)
     throw InputError("parameter mover_latch must be 0 or 1");
   if (max_missed_frames < 0) throw InputError("parameter max_missed_frames must be >= 0");

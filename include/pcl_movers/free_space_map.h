@@ -21,8 +21,8 @@ namespace pcl_movers {
  * beyond `q`: the space `q` occupies now was empty then. For a static opaque object this cannot
  * happen whatever the registration or segmentation error: the ray from any viewpoint to a point of
  * its surface meets the object at or before that point. A moving object, on the other hand, always
- * occupies space that was seen empty earlier (approaching or crossing), or leaves space that is seen
- * through now (receding: test its earlier points against the current scan).
+ * occupies space that was seen empty earlier (approaching or crossing), or leaves space that is
+ * seen through now (receding: test its earlier points against the current scan).
  *
  * Conservative by construction: the nearest range over a small window of cells around the direction
  * is compared (edges, thin poles and mixed pixels never count), empty cells (no return) are

@@ -4,8 +4,8 @@
 #pragma once
 
 #include <pcl_movers/detector_parameters.h>
-#include <pcl_movers/io/tracks.h>
 #include <pcl_movers/free_space_map.h>
+#include <pcl_movers/io/tracks.h>
 #include <pcl_movers/mover_tracker.h>
 #include <pcl_movers/sensor_model.h>
 

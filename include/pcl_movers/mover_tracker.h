@@ -107,9 +107,10 @@ class MoverTracker {
     std::deque<char> fast;     ///< speed > mover_speed after each of the last updates
     std::deque<Eigen::Vector3d> history;  ///< (x, y, time) of the last measurements
     SurfaceDensity::Ptr model;            ///< accumulated surface density (registration mode)
-    int since_registration = 0;  ///< cheap (unregistered) frames since the last registration
-    bool confirmed = false;  ///< passed the mover decision once (latched, see mover_latch)
-    double free_space = 0;   ///< free-space evidence of the last test (fraction seen through)
+    int since_registration = 0;   ///< cheap (unregistered) frames since the last registration
+    bool confirmed = false;       ///< passed the mover decision once (latched, see mover_latch)
+    double free_space = 0;        ///< free-space evidence of the last test (fraction seen through)
+    std::deque<char> free_votes;  ///< free-space test passed, for each of the last tests
     /// World points of the last updates (subsampled), oldest first, for the free-space test.
     std::deque<std::vector<Eigen::Vector3f>> past_points;
   };

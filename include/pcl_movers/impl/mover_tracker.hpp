@@ -186,7 +186,13 @@ void MoverTracker<PointT>::decideMover(Track& track,
   if (elapsed <= 0) return;
   const double displacement = (last.template head<2>() - first.template head<2>()).norm();
   if (displacement < p.displacement_ratio * p.mover_speed * elapsed) return;
-  if (!freeSpaceEvidence(track, points)) return;
+  // One test can be fooled (a cluster that briefly included something else, a mixed edge);
+  // free_space_votes updates with evidence are needed, within the last mover_window updates.
+  track.free_votes.push_back(freeSpaceEvidence(track, points) ? 1 : 0);
+  while (static_cast<int>(track.free_votes.size()) > p.mover_window) track.free_votes.pop_front();
+  int free_votes = 0;
+  for (const char f : track.free_votes) free_votes += f;
+  if (free_space_map_ && p.free_space_lag > 0 && free_votes < p.free_space_votes) return;
   track.mover = true;
   track.confirmed = true;
 }
@@ -249,6 +255,8 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
 
   // 2.-3. gate and score
   std::vector<Match> matches;
+  std::vector<double> held_distance(tracks_.size(), std::numeric_limits<double>::max());
+  std::vector<int> held_cluster(tracks_.size(), -1);
   const double accel_term = 0.5 * p.acceleration_limit * dt * dt;
   for (std::size_t ti = 0; ti < tracks_.size(); ++ti) {
     const Track& track = tracks_[ti];
@@ -307,7 +315,15 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
                   (cand.features.centroid - track.features.centroid).template head<2>();
           radius = p.young_search_radius;
         }
-        if (!registerCandidate(track, cand, guess, radius, sensor_origin, m)) continue;
+        if (!registerCandidate(track, cand, guess, radius, sensor_origin, m)) {
+          // Remember the nearest gated candidate a confirmed mover failed to register (turning,
+          // half occluded): it may still be that mover (see "held" below).
+          if (track.confirmed && distance < held_distance[ti]) {
+            held_distance[ti] = distance;
+            held_cluster[ti] = static_cast<int>(c);
+          }
+          continue;
+        }
       }
       matches.push_back(std::move(m));
     }
@@ -362,6 +378,9 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     t.z = m.measurement.z();
     t.last_time = time;
     ++t.hits;
+    // Re-acquired after coasting: the association is the least certain here, so earlier points
+    // may belong to another object; the receding test only uses points from this run of updates.
+    if (t.missed > 0) t.past_points.clear();
     t.missed = 0;
     t.similarity = m.similarity;
     t.features = cand.features;
@@ -423,16 +442,37 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     r.velocity = t.filter.velocity();
   }
 
+  // Held clusters: a confirmed mover whose only gated candidates registered with B below
+  // min_similarity is not updated (low B is not a measurement: no Kalman update, no model
+  // accumulation, the track coasts), but a cluster nobody else took near its prediction is
+  // reported as that track instead of starting a new one. Otherwise each such frame would be
+  // a missed mover plus a fresh unconfirmed track, and identities would churn.
+  if (p.hold_confirmed) {
+    for (std::size_t ti = 0; ti < tracks_.size(); ++ti) {
+      const int c = held_cluster[ti];
+      if (track_used[ti] || c < 0 || cluster_used[c]) continue;
+      Track& t = tracks_[ti];
+      if (t.missed + 1 > p.max_missed_frames) continue;  // dies now: let the cluster be born
+      track_used[ti] = 1;
+      cluster_used[c] = 1;
+      ++t.missed;  // still coasting: deleted after max_missed_frames without a real update
+      t.features = candidates[c].features;
+      auto& r = results_[c];
+      r.track_id = t.id;
+      r.mover = t.mover;
+      r.similarity = 0;
+      r.velocity = t.filter.velocity();
+    }
+  }
+
   // 5. coast / delete unmatched tracks
   std::vector<Track> kept;
   kept.reserve(tracks_.size() + candidates.size());
   for (std::size_t ti = 0; ti < tracks_.size(); ++ti) {
     Track& t = tracks_[ti];
-    if (!track_used[ti]) {
-      ++t.missed;
-      // A track seen only once is likely clutter: it does not coast.
-      if (t.missed > p.max_missed_frames || (t.hits < 2 && t.missed > 1)) continue;
-    }
+    if (!track_used[ti]) ++t.missed;
+    // A track seen only once is likely clutter: it does not coast.
+    if (t.missed > p.max_missed_frames || (t.hits < 2 && t.missed > 1)) continue;
     kept.push_back(std::move(t));
   }
   tracks_ = std::move(kept);
