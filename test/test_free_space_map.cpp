@@ -41,7 +41,8 @@ Scan castScan(const Eigen::Vector2d& ego, const std::vector<Box>& boxes) {
       int hit = -1;
       for (std::size_t b = 0; b < boxes.size(); ++b) {
         const Box& box = boxes[b];
-        const Eigen::Vector3d lo(box.centre.x() - box.length / 2, box.centre.y() - box.width / 2, 0);
+        const Eigen::Vector3d lo(box.centre.x() - box.length / 2, box.centre.y() - box.width / 2,
+                                 0);
         const Eigen::Vector3d hi(box.centre.x() + box.length / 2, box.centre.y() + box.width / 2,
                                  box.height);
         double t0 = 0, t1 = std::numeric_limits<double>::max();
