@@ -24,14 +24,13 @@ FreeSpaceMap::Evidence FreeSpaceMap::test(const std::vector<Eigen::Vector3f>& wo
   Evidence e;
   if (frames_ago < 0 || frames_ago >= static_cast<int>(scans_.size())) return e;
   const Scan& s = scans_[static_cast<std::size_t>(frames_ago)];
-  constexpr float kDeg = static_cast<float>(180.0 / M_PI);
   for (const auto& w : world_points) {
     const Eigen::Vector3f q = s.world_to_sensor * w;
     const float rxy = std::sqrt(q.x() * q.x() + q.y() * q.y());
     const float d = std::sqrt(rxy * rxy + q.z() * q.z());
     if (!(d > 0.5f)) continue;
-    const int row = cellRow(std::atan2(q.z(), rxy) * kDeg);
-    const int col = cellCol(std::atan2(q.y(), q.x()) * kDeg);
+    const int row = cellRow(detail::fastAtan2Deg(q.z(), rxy));
+    const int col = cellCol(detail::fastAtan2Deg(q.y(), q.x()));
     // Nearest return over the window: a ray that passed just beside an edge never counts.
     float nearest = 0.0f;
     for (int dr = -win_rows_; dr <= win_rows_; ++dr) {

@@ -230,3 +230,18 @@ TEST(FreeSpaceMap, TrackerConfirmsMoverThroughFreeSpace) {
     EXPECT_EQ(count(mover), static_cast<int>(mover.size()) - first) << mode;
   }
 }
+
+TEST(FreeSpaceMap, FastAtan2IsAccurateToAThousandthOfADegree) {
+  double worst = 0;
+  for (int i = 0; i < 3600; ++i) {
+    const double a = (i * 0.1 - 179.95) * M_PI / 180;
+    for (const double r : {0.3, 7.0, 120.0}) {
+      const float y = static_cast<float>(r * std::sin(a)), x = static_cast<float>(r * std::cos(a));
+      const double err = std::abs(pcl_movers::detail::fastAtan2Deg(y, x) -
+                                  std::atan2(double(y), double(x)) * 180 / M_PI);
+      worst = std::max(worst, err);
+    }
+  }
+  EXPECT_LT(worst, 1e-3);
+  EXPECT_FLOAT_EQ(pcl_movers::detail::fastAtan2Deg(0, 0), 0.0f);
+}

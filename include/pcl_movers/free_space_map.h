@@ -102,6 +102,25 @@ class FreeSpaceMap {
 };
 
 // ----------------------------------------------------------------------------- implementation
+namespace detail {
+/** \brief atan2 in degrees, |error| < 0.001° (cells are 0.2°): std::atan2 on every point of
+ * every scan would cost more than the rest of the map. */
+inline float fastAtan2Deg(float y, float x) {
+  const float ax = std::abs(x), ay = std::abs(y);
+  const float mx = ax > ay ? ax : ay, mn = ax > ay ? ay : ax;
+  if (mx == 0.0f) return 0.0f;
+  const float a = mn / mx, s = a * a;
+  float r =
+      a * (0.99997726f +
+           s * (-0.33262347f +
+                s * (0.19354346f + s * (-0.11643287f + s * (0.05265332f - s * 0.01172120f)))));
+  if (ay > ax) r = 1.57079637f - r;
+  if (x < 0) r = 3.14159274f - r;
+  if (y < 0) r = -r;
+  return r * 57.2957795f;
+}
+}  // namespace detail
+
 template <typename PointT>
 void FreeSpaceMap::addScan(const pcl::PointCloud<PointT>& scan, const Eigen::Isometry3d& pose) {
   Scan s;
@@ -112,15 +131,14 @@ void FreeSpaceMap::addScan(const pcl::PointCloud<PointT>& scan, const Eigen::Iso
   }
   s.world_to_sensor = pose.inverse().cast<float>();
   s.range.assign(static_cast<std::size_t>(rows_) * cols_, 0.0f);
-  constexpr float kDeg = static_cast<float>(180.0 / M_PI);
   for (const auto& p : scan.points) {
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
     const float rxy = std::sqrt(p.x * p.x + p.y * p.y);
     const float r = std::sqrt(rxy * rxy + p.z * p.z);
     if (r < 0.5f) continue;
-    const int row = cellRow(std::atan2(p.z, rxy) * kDeg);
+    const int row = cellRow(detail::fastAtan2Deg(p.z, rxy));
     if (row < 0 || row >= rows_) continue;
-    const int col = cellCol(std::atan2(p.y, p.x) * kDeg);
+    const int col = cellCol(detail::fastAtan2Deg(p.y, p.x));
     float& cell = s.range[static_cast<std::size_t>(row) * cols_ + col];
     if (cell == 0.0f || r < cell) cell = r;
   }

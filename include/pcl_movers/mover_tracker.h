@@ -51,8 +51,9 @@ namespace pcl_movers {
  *     through (FreeSpaceMap). Static objects cannot produce this evidence, whatever their
  *     registration or segmentation errors, so it rejects the centroid-shift and registration-slip
  *     false alarms the kinematic rules let through;
- *  7. latching (`mover_latch`): a confirmed mover stays a mover while its track lives (a car
- *     waiting at a light, a pedestrian pausing), unless it becomes a large structure.
+ *  7. latching (`mover_latch`): a track decided mover in `mover_window` consecutive updates stays
+ *     a mover while its track lives (a car waiting at a light, a pedestrian pausing), unless it
+ *     becomes a large structure.
  *
  * The registered measurement is the track's reference point: the model grid is centred where the
  * object was first seen and the registration maps each new view onto it, so the measured position
@@ -107,9 +108,10 @@ class MoverTracker {
     std::deque<char> fast;     ///< speed > mover_speed after each of the last updates
     std::deque<Eigen::Vector3d> history;  ///< (x, y, time) of the last measurements
     SurfaceDensity::Ptr model;            ///< accumulated surface density (registration mode)
-    int since_registration = 0;   ///< cheap (unregistered) frames since the last registration
-    bool confirmed = false;       ///< passed the mover decision once (latched, see mover_latch)
-    double free_space = 0;        ///< free-space evidence of the last test (fraction seen through)
+    int since_registration = 0;  ///< cheap (unregistered) frames since the last registration
+    bool confirmed = false;      ///< latched mover (see mover_latch)
+    int mover_run = 0;           ///< consecutive updates decided mover (latched after mover_window)
+    double free_space = 0;       ///< free-space evidence of the last test (fraction seen through)
     std::deque<char> free_votes;  ///< free-space test passed, for each of the last tests
     /// World points of the last updates (subsampled), oldest first, for the free-space test.
     std::deque<std::vector<Eigen::Vector3f>> past_points;
@@ -191,7 +193,8 @@ class MoverTracker {
 
   /** \brief Free-space evidence of a track: the larger fraction of (a) its current points seen
    * through by the scan `free_space_lag` frames ago and (b) its oldest stored points seen through
-   * by the current scan. Sets track.free_space; true when it reaches free_space_min_fraction. */
+   * by the current scan (that view is then dropped, so every vote tests a different view). Sets
+   * track.free_space; true when it reaches free_space_min_fraction. */
   bool freeSpaceEvidence(Track& track, const std::vector<Eigen::Vector3f>& points) const;
 
   void ensurePoints(const PointCloud& cloud, const pcl::PointIndices& indices,

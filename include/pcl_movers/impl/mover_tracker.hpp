@@ -157,7 +157,12 @@ bool MoverTracker<PointT>::freeSpaceEvidence(Track& track,
   const auto ahead = free_space_map_->test(points, p.free_space_lag);
   // (b) receding: the object's earlier surface is now seen through by the current scan.
   FreeSpaceMap::Evidence behind;
-  if (track.past_points.size() > 1) behind = free_space_map_->test(track.past_points.front(), 0);
+  // The oldest stored view is used once and dropped: each vote tests a different earlier view,
+  // so one early view with stray points (mixed pixels at an edge) cannot vote repeatedly.
+  if (track.past_points.size() > 1) {
+    behind = free_space_map_->test(track.past_points.front(), 0);
+    track.past_points.pop_front();
+  }
   const auto score = [&](const FreeSpaceMap::Evidence& e) {
     return e.seen_through >= p.free_space_min_points ? e.fraction() : 0.0;
   };
@@ -169,12 +174,14 @@ template <typename PointT>
 void MoverTracker<PointT>::decideMover(Track& track,
                                        const std::vector<Eigen::Vector3f>& points) const {
   const auto& p = parameters_;
+  const int run = track.mover_run;
   track.mover = false;
   if (track.large) return;
   if (track.confirmed && p.mover_latch) {
     track.mover = true;
     return;
   }
+  track.mover_run = 0;  // restored below when this update passes every test
   if (track.hits < p.mover_min_age) return;
   if (track.features.height < p.min_mover_height) return;
   int votes = 0;
@@ -194,7 +201,10 @@ void MoverTracker<PointT>::decideMover(Track& track,
   for (const char f : track.free_votes) free_votes += f;
   if (free_space_map_ && p.free_space_lag > 0 && free_votes < p.free_space_votes) return;
   track.mover = true;
-  track.confirmed = true;
+  // Latch only after a steady run of positive decisions: a brief false confirmation (a cluster
+  // that jumped to another object) must not become a mover for the rest of the track's life.
+  track.mover_run = run + 1;
+  if (track.mover_run >= p.mover_window) track.confirmed = true;
 }
 
 template <typename PointT>
@@ -318,7 +328,7 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
         if (!registerCandidate(track, cand, guess, radius, sensor_origin, m)) {
           // Remember the nearest gated candidate a confirmed mover failed to register (turning,
           // half occluded): it may still be that mover (see "held" below).
-          if (track.confirmed && distance < held_distance[ti]) {
+          if ((track.confirmed || track.mover) && distance < held_distance[ti]) {
             held_distance[ti] = distance;
             held_cluster[ti] = static_cast<int>(c);
           }
