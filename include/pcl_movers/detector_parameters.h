@@ -51,7 +51,10 @@ struct DetectorParameters {
   /// Density grid cell size in x/y [m] and in z [m], and grid size in cells: 29×29 like the paper,
   /// but 3 slices of 0.94 m instead of 7 — the paper's own speed-up ("reducing vertical resolution
   /// to three slices gave a good speedup while maintaining good robustness").
-  double density_resolution = 0.2;
+  /// 0.3 m × 29 cells = 8.7 m: the grid must hold the longest mover (a 7-8 m truck); at 0.2 m
+  /// (5.8 m) a truck's model was truncated and its reference point slid (open truck velocity
+  /// error 1.05 → 0.29 m/s, other targets unchanged).
+  double density_resolution = 0.3;
   double density_resolution_z = 0.94;
   int density_cells_xy = 29;
   int density_cells_z = 3;
@@ -121,6 +124,25 @@ struct DetectorParameters {
   /// Displacement check: net measured displacement over the window must be at least this
   /// fraction of mover_speed × elapsed time.
   double displacement_ratio = 0.6;
+  /// Free-space test (FreeSpaceMap): a mover must occupy space the scan free_space_lag frames ago
+  /// saw through, or have left space the current scan sees through (0 = test off). 5 frames at
+  /// 10 Hz: a target at mover_speed has moved 0.6 m, twice the near margin.
+  int free_space_lag = 5;
+  /// Fraction of the tested points that must be seen through, and at least this many points.
+  double free_space_min_fraction = 0.2;
+  int free_space_min_points = 3;
+  /// Tests that must pass (among the last mover_window ones) before a track is confirmed.
+  int free_space_votes = 2;
+  /// Seen through = the earlier range exceeds the point's distance by max(margin,
+  /// margin_per_metre · distance) [m, m/m] (range noise, pose error, beam footprint).
+  double free_space_margin = 0.3;
+  double free_space_margin_per_metre = 0.02;
+  /// Once confirmed, a track stays a mover while it is tracked (1) or is re-decided every update
+  /// (0).
+  int mover_latch = 1;
+  /// 1 = a confirmed mover whose gated candidate failed registration (low B) keeps that cluster
+  /// as its output row without an update, instead of the cluster starting a new track.
+  int hold_confirmed = 1;
 
   /** \brief Calls `f(key, member, description)` for every parameter (double, int or string). */
   template <typename F>
@@ -194,6 +216,15 @@ void DetectorParameters::forEachParameter(F&& f) {
   f("mover_votes", mover_votes, "fast updates M of the last N needed");
   f("mover_min_age", mover_min_age, "min updates of a mover track K");
   f("displacement_ratio", displacement_ratio, "min net displacement / (mover_speed * time)");
+  f("free_space_lag", free_space_lag,
+    "free-space test against the scan this many frames ago (0 = off)");
+  f("free_space_min_fraction", free_space_min_fraction, "min fraction of points seen through");
+  f("free_space_min_points", free_space_min_points, "min number of points seen through");
+  f("free_space_votes", free_space_votes, "passed free-space tests needed to confirm");
+  f("free_space_margin", free_space_margin, "seen-through range margin [m]");
+  f("free_space_margin_per_metre", free_space_margin_per_metre, "margin per metre of distance");
+  f("mover_latch", mover_latch, "1 = a confirmed mover stays a mover while tracked");
+  f("hold_confirmed", hold_confirmed, "1 = confirmed movers keep low-B clusters (no update)");
 }
 
 namespace detail {
@@ -308,6 +339,18 @@ inline void DetectorParameters::validate() const {
     throw InputError("parameter mover_votes must not exceed mover_window");
   if (min_similarity < 0 || min_similarity > 1)
     throw InputError("parameter min_similarity must be in [0, 1]");
+  if (free_space_lag < 0 || free_space_lag > 50)
+    throw InputError("parameter free_space_lag must be in [0, 50]");
+  if (free_space_min_fraction < 0 || free_space_min_fraction > 1)
+    throw InputError("parameter free_space_min_fraction must be in [0, 1]");
+  if (free_space_votes < 1) throw InputError("parameter free_space_votes must be >= 1");
+  if (free_space_min_points < 1) throw InputError("parameter free_space_min_points must be >= 1");
+  if (free_space_margin < 0 || free_space_margin_per_metre < 0)
+    throw InputError("parameters free_space_margin(_per_metre) must be >= 0");
+  if (hold_confirmed != 0 && hold_confirmed != 1)
+    throw InputError("parameter hold_confirmed must be 0 or 1");
+  if (mover_latch != 0 && mover_latch != 1)
+    throw InputError("parameter mover_latch must be 0 or 1");
   if (max_missed_frames < 0) throw InputError("parameter max_missed_frames must be >= 0");
   if (min_cluster_points < 1) throw InputError("parameter min_cluster_points must be >= 1");
   if (mode != "registration" && mode != "centroid")

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <pcl_movers/detector_parameters.h>
+#include <pcl_movers/free_space_map.h>
 #include <pcl_movers/io/tracks.h>
 #include <pcl_movers/mover_tracker.h>
 #include <pcl_movers/sensor_model.h>
@@ -103,7 +104,10 @@ class MoverDetector {
   const MoverTracker<PointT>& getTracker() const { return tracker_; }
 
   /** \brief Forgets all tracks (start of a new sequence). */
-  void reset() { tracker_.reset(); }
+  void reset() {
+    tracker_.reset();
+    free_space_.clear();
+  }
 
  protected:
   /** \brief Organizes `scan` into a range image (copy when it is already organized). */
@@ -113,6 +117,7 @@ class MoverDetector {
   SensorModel sensor_model_;
   bool has_sensor_model_ = false;
   MoverTracker<PointT> tracker_;
+  FreeSpaceMap free_space_;  ///< recent scans for the tracker's free-space test
   std::vector<std::pair<std::string, double>> timings_;
 };
 

@@ -5,6 +5,7 @@
 
 #include <pcl_movers/bhattacharya_registration.h>
 #include <pcl_movers/detector_parameters.h>
+#include <pcl_movers/free_space_map.h>
 #include <pcl_movers/kalman_filter_cv.h>
 #include <pcl_movers/surface_density.h>
 
@@ -44,7 +45,15 @@ namespace pcl_movers {
  *     `mover_window` updates,
  *     at least `mover_min_age` updates, and the net displacement of the measurements over the
  *     window at least `displacement_ratio`·`mover_speed`·elapsed time (a filter velocity inflated
- * by a few noisy measurements does not survive this check).
+ *     by a few noisy measurements does not survive this check), and — when a FreeSpaceMap is set —
+ *     free-space evidence: at least `free_space_min_fraction` of the object's points lie in space
+ *     an earlier scan saw through, or its earlier points lie in space the current scan sees
+ *     through (FreeSpaceMap). Static objects cannot produce this evidence, whatever their
+ *     registration or segmentation errors, so it rejects the centroid-shift and registration-slip
+ *     false alarms the kinematic rules let through;
+ *  7. latching (`mover_latch`): a track decided mover in `mover_window` consecutive updates stays
+ *     a mover while its track lives (a car waiting at a light, a pedestrian pausing), unless it
+ *     becomes a large structure.
  *
  * The registered measurement is the track's reference point: the model grid is centred where the
  * object was first seen and the registration maps each new view onto it, so the measured position
@@ -100,6 +109,12 @@ class MoverTracker {
     std::deque<Eigen::Vector3d> history;  ///< (x, y, time) of the last measurements
     SurfaceDensity::Ptr model;            ///< accumulated surface density (registration mode)
     int since_registration = 0;  ///< cheap (unregistered) frames since the last registration
+    bool confirmed = false;      ///< latched mover (see mover_latch)
+    int mover_run = 0;           ///< consecutive updates decided mover (latched after mover_window)
+    double free_space = 0;       ///< free-space evidence of the last test (fraction seen through)
+    std::deque<char> free_votes;  ///< free-space test passed, for each of the last tests
+    /// World points of the last updates (subsampled), oldest first, for the free-space test.
+    std::deque<std::vector<Eigen::Vector3f>> past_points;
   };
 
   /** \brief What happened to one input cluster in the last update(). */
@@ -123,6 +138,12 @@ class MoverTracker {
    * in the world frame (ranges → density σ) \param time frame time [s], increasing */
   void update(const PointCloudConstPtr& cloud, const std::vector<pcl::PointIndices>& clusters,
               const Eigen::Vector3d& sensor_origin, double time);
+
+  /** \brief Scans for the free-space test (see DetectorParameters::free_space_lag); the map must
+   * already hold the current frame's scan when update() is called. nullptr (default) disables the
+   * test. Not owned. */
+  void setFreeSpaceMap(const FreeSpaceMap* map) { free_space_map_ = map; }
+  const FreeSpaceMap* getFreeSpaceMap() const { return free_space_map_; }
 
   /** \brief Per input cluster of the last update(), in input order. */
   const std::vector<ClusterResult>& getClusterResults() const { return results_; }
@@ -166,8 +187,15 @@ class MoverTracker {
   SurfaceDensity::Ptr makeModel(const Candidate& candidate,
                                 const Eigen::Vector3d& sensor_origin) const;
 
-  /** \brief Updates the mover flag of a track after an update. */
-  void decideMover(Track& track) const;
+  /** \brief Updates the mover flag of a track after an update; `points` are the world points of
+   * the cluster just assigned (for the free-space test). */
+  void decideMover(Track& track, const std::vector<Eigen::Vector3f>& points) const;
+
+  /** \brief Free-space evidence of a track: the larger fraction of (a) its current points seen
+   * through by the scan `free_space_lag` frames ago and (b) its oldest stored points seen through
+   * by the current scan (that view is then dropped, so every vote tests a different view). Sets
+   * track.free_space; true when it reaches free_space_min_fraction. */
+  bool freeSpaceEvidence(Track& track, const std::vector<Eigen::Vector3f>& points) const;
 
   void ensurePoints(const PointCloud& cloud, const pcl::PointIndices& indices,
                     Candidate& candidate) const;
@@ -180,6 +208,7 @@ class MoverTracker {
   bool has_time_ = false;
   double last_time_ = 0;
   BhattacharyaRegistration<PointT, PointT> registration_;
+  const FreeSpaceMap* free_space_map_ = nullptr;
 };
 
 }  // namespace pcl_movers

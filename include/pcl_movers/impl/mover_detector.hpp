@@ -31,6 +31,7 @@ void MoverDetector<PointT>::setParameters(const DetectorParameters& parameters) 
   parameters_ = parameters;
   tracker_.setParameters(parameters);
   tracker_.reset();
+  free_space_.clear();
   if (!has_sensor_model_ && parameters.sensor != "auto")
     sensor_model_ = SensorModel::fromName(parameters.sensor);
 }
@@ -144,8 +145,17 @@ void MoverDetector<PointT>::process(const PointCloudConstPtr& scan, const Eigen:
     }
   }
 
-  // Tracking.
+  // Tracking; the free-space map needs the current scan first (receding-object test).
   const auto t4 = Clock::now();
+  // (Re)bound every frame: a copied detector must not point into the original's map.
+  if (p.free_space_lag > 0) {
+    free_space_.setHistory(p.free_space_lag + 1);
+    free_space_.setMargin(p.free_space_margin, p.free_space_margin_per_metre);
+    free_space_.addScan(*organized, pose);
+    tracker_.setFreeSpaceMap(&free_space_);
+  } else {
+    tracker_.setFreeSpaceMap(nullptr);
+  }
   tracker_.update(world, world_clusters, pose.translation(), time);
   const auto t5 = Clock::now();
 

@@ -148,10 +148,41 @@ bool MoverTracker<PointT>::registerCandidate(const Track& track, Candidate& cand
 }
 
 template <typename PointT>
-void MoverTracker<PointT>::decideMover(Track& track) const {
+bool MoverTracker<PointT>::freeSpaceEvidence(Track& track,
+                                             const std::vector<Eigen::Vector3f>& points) const {
   const auto& p = parameters_;
+  track.free_space = 0;
+  if (!free_space_map_ || p.free_space_lag <= 0) return true;  // test disabled
+  // (a) approaching / crossing: the object now fills space an earlier scan saw empty.
+  const auto ahead = free_space_map_->test(points, p.free_space_lag);
+  // (b) receding: the object's earlier surface is now seen through by the current scan.
+  FreeSpaceMap::Evidence behind;
+  // The oldest stored view is used once and dropped: each vote tests a different earlier view,
+  // so one early view with stray points (mixed pixels at an edge) cannot vote repeatedly.
+  if (track.past_points.size() > 1) {
+    behind = free_space_map_->test(track.past_points.front(), 0);
+    track.past_points.pop_front();
+  }
+  const auto score = [&](const FreeSpaceMap::Evidence& e) {
+    return e.seen_through >= p.free_space_min_points ? e.fraction() : 0.0;
+  };
+  track.free_space = std::max(score(ahead), score(behind));
+  return track.free_space >= p.free_space_min_fraction;
+}
+
+template <typename PointT>
+void MoverTracker<PointT>::decideMover(Track& track,
+                                       const std::vector<Eigen::Vector3f>& points) const {
+  const auto& p = parameters_;
+  const int run = track.mover_run;
   track.mover = false;
-  if (track.large || track.hits < p.mover_min_age) return;
+  if (track.large) return;
+  if (track.confirmed && p.mover_latch) {
+    track.mover = true;
+    return;
+  }
+  track.mover_run = 0;  // restored below when this update passes every test
+  if (track.hits < p.mover_min_age) return;
   if (track.features.height < p.min_mover_height) return;
   int votes = 0;
   for (const char f : track.fast) votes += f;
@@ -161,7 +192,19 @@ void MoverTracker<PointT>::decideMover(Track& track) const {
   const double elapsed = last.z() - first.z();
   if (elapsed <= 0) return;
   const double displacement = (last.template head<2>() - first.template head<2>()).norm();
-  track.mover = displacement >= p.displacement_ratio * p.mover_speed * elapsed;
+  if (displacement < p.displacement_ratio * p.mover_speed * elapsed) return;
+  // One test can be fooled (a cluster that briefly included something else, a mixed edge);
+  // free_space_votes updates with evidence are needed, within the last mover_window updates.
+  track.free_votes.push_back(freeSpaceEvidence(track, points) ? 1 : 0);
+  while (static_cast<int>(track.free_votes.size()) > p.mover_window) track.free_votes.pop_front();
+  int free_votes = 0;
+  for (const char f : track.free_votes) free_votes += f;
+  if (free_space_map_ && p.free_space_lag > 0 && free_votes < p.free_space_votes) return;
+  track.mover = true;
+  // Latch only after a steady run of positive decisions: a brief false confirmation (a cluster
+  // that jumped to another object) must not become a mover for the rest of the track's life.
+  track.mover_run = run + 1;
+  if (track.mover_run >= p.mover_window) track.confirmed = true;
 }
 
 template <typename PointT>
@@ -222,6 +265,8 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
 
   // 2.-3. gate and score
   std::vector<Match> matches;
+  std::vector<double> held_distance(tracks_.size(), std::numeric_limits<double>::max());
+  std::vector<int> held_cluster(tracks_.size(), -1);
   const double accel_term = 0.5 * p.acceleration_limit * dt * dt;
   for (std::size_t ti = 0; ti < tracks_.size(); ++ti) {
     const Track& track = tracks_[ti];
@@ -280,7 +325,15 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
                   (cand.features.centroid - track.features.centroid).template head<2>();
           radius = p.young_search_radius;
         }
-        if (!registerCandidate(track, cand, guess, radius, sensor_origin, m)) continue;
+        if (!registerCandidate(track, cand, guess, radius, sensor_origin, m)) {
+          // Remember the nearest gated candidate a confirmed mover failed to register (turning,
+          // half occluded): it may still be that mover (see "held" below).
+          if ((track.confirmed || track.mover) && distance < held_distance[ti]) {
+            held_distance[ti] = distance;
+            held_cluster[ti] = static_cast<int>(c);
+          }
+          continue;
+        }
       }
       matches.push_back(std::move(m));
     }
@@ -335,6 +388,9 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     t.z = m.measurement.z();
     t.last_time = time;
     ++t.hits;
+    // Re-acquired after coasting: the association is the least certain here, so earlier points
+    // may belong to another object; the receding test only uses points from this run of updates.
+    if (t.missed > 0) t.past_points.clear();
     t.missed = 0;
     t.similarity = m.similarity;
     t.features = cand.features;
@@ -377,11 +433,46 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
       t.history.assign(
           1, Eigen::Vector3d(cand.features.centroid.x(), cand.features.centroid.y(), time));
     }
-    decideMover(t);
+    std::vector<Eigen::Vector3f> world_points;
+    if (free_space_map_ && p.free_space_lag > 0 && !t.large) {
+      ensurePoints(*cloud, clusters[m.cluster], candidates[m.cluster]);
+      const auto& pts = *candidates[m.cluster].points;
+      world_points.reserve(pts.size());
+      for (const auto& q : pts) world_points.emplace_back(q.x, q.y, q.z);
+    }
+    decideMover(t, world_points);
+    if (!world_points.empty()) {
+      t.past_points.push_back(std::move(world_points));
+      while (static_cast<int>(t.past_points.size()) > p.free_space_lag + 1)
+        t.past_points.pop_front();
+    }
     r.track_id = t.id;
     r.mover = t.mover;
     r.similarity = t.similarity;
     r.velocity = t.filter.velocity();
+  }
+
+  // Held clusters: a confirmed mover whose only gated candidates registered with B below
+  // min_similarity is not updated (low B is not a measurement: no Kalman update, no model
+  // accumulation, the track coasts), but a cluster nobody else took near its prediction is
+  // reported as that track instead of starting a new one. Otherwise each such frame would be
+  // a missed mover plus a fresh unconfirmed track, and identities would churn.
+  if (p.hold_confirmed) {
+    for (std::size_t ti = 0; ti < tracks_.size(); ++ti) {
+      const int c = held_cluster[ti];
+      if (track_used[ti] || c < 0 || cluster_used[c]) continue;
+      Track& t = tracks_[ti];
+      if (t.missed + 1 > p.max_missed_frames) continue;  // dies now: let the cluster be born
+      track_used[ti] = 1;
+      cluster_used[c] = 1;
+      ++t.missed;  // still coasting: deleted after max_missed_frames without a real update
+      t.features = candidates[c].features;
+      auto& r = results_[c];
+      r.track_id = t.id;
+      r.mover = t.mover;
+      r.similarity = 0;
+      r.velocity = t.filter.velocity();
+    }
   }
 
   // 5. coast / delete unmatched tracks
@@ -389,11 +480,9 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
   kept.reserve(tracks_.size() + candidates.size());
   for (std::size_t ti = 0; ti < tracks_.size(); ++ti) {
     Track& t = tracks_[ti];
-    if (!track_used[ti]) {
-      ++t.missed;
-      // A track seen only once is likely clutter: it does not coast.
-      if (t.missed > p.max_missed_frames || (t.hits < 2 && t.missed > 1)) continue;
-    }
+    if (!track_used[ti]) ++t.missed;
+    // A track seen only once is likely clutter: it does not coast.
+    if (t.missed > p.max_missed_frames || (t.hits < 2 && t.missed > 1)) continue;
     kept.push_back(std::move(t));
   }
   tracks_ = std::move(kept);

@@ -1,0 +1,148 @@
+/*
+ * SPDX-License-Identifier: BSD-3-Clause
+ */
+#pragma once
+
+#include <pcl/point_cloud.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <deque>
+#include <memory>
+#include <vector>
+
+namespace pcl_movers {
+
+/** \brief Remembers what the last few scans saw *through*, to tell movers from static objects.
+ *
+ * A scan is stored as a coarse spherical range image in its own sensor frame (nearest return per
+ * cell, every finite point including ground) together with its pose. A world point `q` was **seen
+ * through** by a stored scan when that scan's rays around the direction of `q` all ended clearly
+ * beyond `q`: the space `q` occupies now was empty then. For a static opaque object this cannot
+ * happen whatever the registration or segmentation error: the ray from any viewpoint to a point of
+ * its surface meets the object at or before that point. A moving object, on the other hand, always
+ * occupies space that was seen empty earlier (approaching or crossing), or leaves space that is
+ * seen through now (receding: test its earlier points against the current scan).
+ *
+ * Conservative by construction: the nearest range over a small window of cells around the direction
+ * is compared (edges, thin poles and mixed pixels never count), empty cells (no return) are
+ * unknown, and the margin grows with range (beam divergence, pose error, sparse far sampling).
+ */
+class FreeSpaceMap {
+ public:
+  using Ptr = std::shared_ptr<FreeSpaceMap>;
+  using ConstPtr = std::shared_ptr<const FreeSpaceMap>;
+
+  FreeSpaceMap() = default;
+
+  /** \brief Number of scans kept (the current one plus `history - 1` earlier ones). */
+  void setHistory(int history) { history_ = history < 1 ? 1 : history; }
+  int getHistory() const { return history_; }
+  /** \brief Angular cell sizes of the stored range images [deg]. */
+  void setResolution(double azimuth_deg, double elevation_deg);
+  double getAzimuthResolution() const { return az_res_deg_; }
+  double getElevationResolution() const { return el_res_deg_; }
+  /** \brief A point is seen through when the nearest stored range around its direction exceeds
+   * its distance by max(margin, margin_per_metre · distance) [m]. */
+  void setMargin(double margin, double margin_per_metre) {
+    margin_ = margin;
+    margin_per_metre_ = margin_per_metre;
+  }
+  double getMargin() const { return margin_; }
+  double getMarginPerMetre() const { return margin_per_metre_; }
+  /** \brief Half-size of the cell window compared around a direction (rows, columns). */
+  void setWindow(int rows, int cols) {
+    win_rows_ = rows < 0 ? 0 : rows;
+    win_cols_ = cols < 0 ? 0 : cols;
+  }
+
+  /** \brief Adds a scan (points in the sensor frame, NaN allowed) taken at `pose` (sensor→world).
+   * The oldest scan is forgotten when more than `history` are stored. */
+  template <typename PointT>
+  void addScan(const pcl::PointCloud<PointT>& scan, const Eigen::Isometry3d& pose);
+
+  /** \brief Scans stored (≤ history). Index 0 is the latest. */
+  int size() const { return static_cast<int>(scans_.size()); }
+
+  /** \brief Result of a query. */
+  struct Evidence {
+    int tested = 0;        ///< points whose direction had at least one return in the window
+    int seen_through = 0;  ///< of those, points lying in space the scan saw empty
+    double fraction() const { return tested > 0 ? static_cast<double>(seen_through) / tested : 0; }
+  };
+
+  /** \brief Tests world points against the scan stored `frames_ago` scans back (0 = latest).
+   * Returns an empty Evidence when that scan is not stored. */
+  Evidence test(const std::vector<Eigen::Vector3f>& world_points, int frames_ago) const;
+
+  /** \brief Forgets all scans. */
+  void clear() { scans_.clear(); }
+
+ protected:
+  struct Scan {
+    Eigen::Isometry3f world_to_sensor = Eigen::Isometry3f::Identity();
+    std::vector<float> range;  ///< 0 = no return
+  };
+  int cellRow(float elevation_deg) const {
+    return static_cast<int>(std::floor((elevation_deg - min_el_deg_) / el_res_deg_));
+  }
+  int cellCol(float azimuth_deg) const {
+    int c = static_cast<int>(std::floor((azimuth_deg + 180.0f) / az_res_deg_));
+    return c >= cols_ ? c - cols_ : (c < 0 ? c + cols_ : c);
+  }
+
+  int history_ = 8;
+  float az_res_deg_ = 0.2f, el_res_deg_ = 0.2f;
+  // Elevations covered: every preset sensor (HDL-64E −24.9°…+2°, OS1 ±16.6°, VLP-16 ±15°).
+  float min_el_deg_ = -35.0f, max_el_deg_ = 25.0f;
+  int rows_ = 300, cols_ = 1800;
+  double margin_ = 0.3, margin_per_metre_ = 0.02;
+  int win_rows_ = 2, win_cols_ = 1;
+  std::deque<Scan> scans_;
+};
+
+// ----------------------------------------------------------------------------- implementation
+namespace detail {
+/** \brief atan2 in degrees, |error| < 0.001° (cells are 0.2°): std::atan2 on every point of
+ * every scan would cost more than the rest of the map. */
+inline float fastAtan2Deg(float y, float x) {
+  const float ax = std::abs(x), ay = std::abs(y);
+  const float mx = ax > ay ? ax : ay, mn = ax > ay ? ay : ax;
+  if (mx == 0.0f) return 0.0f;
+  const float a = mn / mx, s = a * a;
+  float r =
+      a * (0.99997726f +
+           s * (-0.33262347f +
+                s * (0.19354346f + s * (-0.11643287f + s * (0.05265332f - s * 0.01172120f)))));
+  if (ay > ax) r = 1.57079637f - r;
+  if (x < 0) r = 3.14159274f - r;
+  if (y < 0) r = -r;
+  return r * 57.2957795f;
+}
+}  // namespace detail
+
+template <typename PointT>
+void FreeSpaceMap::addScan(const pcl::PointCloud<PointT>& scan, const Eigen::Isometry3d& pose) {
+  Scan s;
+  if (scans_.size() >= static_cast<std::size_t>(history_)) {
+    // Reuse the oldest image's memory.
+    s = std::move(scans_.back());
+    scans_.pop_back();
+  }
+  s.world_to_sensor = pose.inverse().cast<float>();
+  s.range.assign(static_cast<std::size_t>(rows_) * cols_, 0.0f);
+  for (const auto& p : scan.points) {
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
+    const float rxy = std::sqrt(p.x * p.x + p.y * p.y);
+    const float r = std::sqrt(rxy * rxy + p.z * p.z);
+    if (r < 0.5f) continue;
+    const int row = cellRow(detail::fastAtan2Deg(p.z, rxy));
+    if (row < 0 || row >= rows_) continue;
+    const int col = cellCol(detail::fastAtan2Deg(p.y, p.x));
+    float& cell = s.range[static_cast<std::size_t>(row) * cols_ + col];
+    if (cell == 0.0f || r < cell) cell = r;
+  }
+  scans_.push_front(std::move(s));
+}
+
+}  // namespace pcl_movers
