@@ -146,7 +146,7 @@ class RangeImageOrganizer : public pcl::PCLBase<PointT> {
   bool full_revolution_ = true;
   // Per-block scratch of the vectorized first pass (structure of arrays).
   std::vector<float> block_x_, block_y_, block_z_, block_w_, block_t_;
-  std::vector<int> block_status_, block_table_, block_column_;
+  std::vector<int> block_status_, block_table_, block_column_, block_row_;
 };
 
 }  // namespace pcl_movers

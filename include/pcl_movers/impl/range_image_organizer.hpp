@@ -53,7 +53,24 @@ struct OrganizerKernelParams {
   float mean_offset, g_min, g_scale, g_bins, w_scale, w_bins;  ///< row table (g, w) cells
   float azimuth_max, columns_per_radian, columns;
   bool full_revolution;
+  /// Row table (padded by one entry) and mid-lines: rows are resolved where the table is unique.
+  const std::uint16_t* row_table;
+  const float* mid_a;
+  const float* mid_h;
 };
+
+/** \brief Row of each point from the table cell: the cell's top row, one lower when t is below
+ * that row's mid-line; -1 where the table has no unique answer (the caller searches). */
+inline void organizerResolveRows(const OrganizerKernelParams& c, std::size_t begin, std::size_t m,
+                                 const float* ws, const float* ts, const int* table_cell,
+                                 int* rows) {
+  for (std::size_t k = begin; k < m; ++k) {
+    const std::uint16_t entry = table_cell[k] >= 0 ? c.row_table[table_cell[k]] : kTableAmbiguous;
+    rows[k] = entry == kTableAmbiguous
+                  ? -1
+                  : int(entry) + (ts[k] < c.mid_a[entry] + c.mid_h[entry] * ws[k] ? 1 : 0);
+  }
+}
 
 /** \brief The per-point arithmetic of RangeImageOrganizer for `m` points given as arrays x, y, z:
  * w = 1/ρ, t = z/ρ, status (0 placed, 1 not finite, 2 outside range or view), the row-table cell
@@ -61,7 +78,7 @@ struct OrganizerKernelParams {
  * scalar reference; organizerKernel is the same arithmetic four points at a time. */
 inline void organizerKernelScalar(const OrganizerKernelParams& c, const float* xs, const float* ys,
                                   const float* zs, std::size_t m, float* ws, float* ts, int* status,
-                                  int* table_cell, int* column_code) {
+                                  int* table_cell, int* column_code, int* rows) {
   for (std::size_t k = 0; k < m; ++k) {
     const float x = xs[k], y = ys[k], z = zs[k];
     // x - x is 0 for finite x, NaN for NaN and ±Inf.
@@ -93,6 +110,7 @@ inline void organizerKernelScalar(const OrganizerKernelParams& c, const float* x
     ts[k] = t;
     status[k] = !finite ? 1 : ((in_range && in_beams && in_fov) ? 0 : 2);
   }
+  organizerResolveRows(c, 0, m, ws, ts, table_cell, rows);
 }
 
 #if defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
@@ -109,7 +127,8 @@ __attribute__((target("avx2"))) inline void organizerKernelAvx2(const OrganizerK
                                                                 const float* xs, const float* ys,
                                                                 const float* zs, std::size_t m,
                                                                 float* ws, float* ts, int* status,
-                                                                int* table_cell, int* column_code) {
+                                                                int* table_cell, int* column_code,
+                                                                int* rows) {
   const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.f), half = _mm256_set1_ps(0.5f);
   const __m256 sign = _mm256_set1_ps(-0.f);
   const __m256 max_range2 = _mm256_set1_ps(c.max_range2), min_range2 = _mm256_set1_ps(c.min_range2);
@@ -154,6 +173,25 @@ __attribute__((target("avx2"))) inline void organizerKernelAvx2(const OrganizerK
         reinterpret_cast<__m256i*>(table_cell + k),
         _mm256_or_si256(_mm256_and_si256(_mm256_castps_si256(in_table), cell),
                         _mm256_andnot_si256(_mm256_castps_si256(in_table), _mm256_set1_epi32(-1))));
+    {
+      // organizerResolveRows with gathers: the 16-bit entry read as the low half of 32 bits (the
+      // table has a padding entry), then the mid-line of the entry's row.
+      const __m256i table_mask = _mm256_castps_si256(in_table);
+      const __m256i cell_index = _mm256_and_si256(table_mask, cell);
+      const __m256i raw = _mm256_mask_i32gather_epi32(_mm256_set1_epi32(-1),
+                                                      reinterpret_cast<const int*>(c.row_table),
+                                                      cell_index, table_mask, 2);
+      const __m256i entry = _mm256_and_si256(raw, _mm256_set1_epi32(0xFFFF));
+      const __m256i ambiguous = _mm256_cmpeq_epi32(entry, _mm256_set1_epi32(0xFFFF));
+      const __m256i row_index = _mm256_andnot_si256(ambiguous, entry);
+      const __m256 mid_a = _mm256_i32gather_ps(c.mid_a, row_index, 4);
+      const __m256 mid_h = _mm256_i32gather_ps(c.mid_h, row_index, 4);
+      const __m256 below =
+          _mm256_cmp_ps(t, _mm256_add_ps(mid_a, _mm256_mul_ps(mid_h, w)), _CMP_LT_OQ);
+      const __m256i row = _mm256_sub_epi32(row_index, _mm256_castps_si256(below));
+      _mm256_storeu_si256(reinterpret_cast<__m256i*>(rows + k),
+                          _mm256_or_si256(ambiguous, _mm256_andnot_si256(ambiguous, row)));
+    }
     // fastAtan2, lane-wise.
     const __m256 ax = _mm256_andnot_ps(sign, x), ay = _mm256_andnot_ps(sign, y);
     const __m256 mx = _mm256_max_ps(ax, ay), mn = _mm256_min_ps(ax, ay);
@@ -213,10 +251,10 @@ inline bool organizerHasAvx2() {
  * arrays). Falls back to the scalar loop elsewhere. */
 inline void organizerKernel(const OrganizerKernelParams& c, const float* xs, const float* ys,
                             const float* zs, std::size_t m, float* ws, float* ts, int* status,
-                            int* table_cell, int* column_code) {
+                            int* table_cell, int* column_code, int* rows) {
 #if defined(PCL_MOVERS_ORGANIZER_AVX2)
   if (organizerHasAvx2() && m % 8 == 0) {
-    organizerKernelAvx2(c, xs, ys, zs, m, ws, ts, status, table_cell, column_code);
+    organizerKernelAvx2(c, xs, ys, zs, m, ws, ts, status, table_cell, column_code, rows);
     return;
   }
 #endif
@@ -296,8 +334,9 @@ inline void organizerKernel(const OrganizerKernelParams& c, const float* xs, con
                                     _mm_and_si128(fin, _mm_andnot_si128(ok, _mm_set1_epi32(2))));
     _mm_storeu_si128(reinterpret_cast<__m128i*>(status + k), st);
   }
+  organizerResolveRows(c, 0, m, ws, ts, table_cell, rows);
 #else
-  organizerKernelScalar(c, xs, ys, zs, m, ws, ts, status, table_cell, column_code);
+  organizerKernelScalar(c, xs, ys, zs, m, ws, ts, status, table_cell, column_code, rows);
 #endif
 }
 
@@ -366,7 +405,8 @@ void RangeImageOrganizer<PointT>::prepareLookup(int columns) {
   const float g_cell = std::max(0.25f * min_spacing, (g_max - table_g_min_) / float(1 << 15));
   table_g_bins_ = int(std::ceil((g_max - table_g_min_) / g_cell));
   table_g_scale_ = float(table_g_bins_) / (g_max - table_g_min_);
-  row_table_.assign(std::size_t(table_g_bins_) * std::size_t(table_w_bins_),
+  // One padding entry: the vectorized lookup reads 32 bits at 16-bit entries.
+  row_table_.assign(std::size_t(table_g_bins_) * std::size_t(table_w_bins_) + 1,
                     detail::kTableAmbiguous);
   if (n < int(detail::kTableAmbiguous)) {
     for (int j = 0; j < table_w_bins_; ++j) {
@@ -455,7 +495,11 @@ void RangeImageOrganizer<PointT>::placeBlock(std::size_t begin, std::size_t end)
   c.columns_per_radian = columns_per_radian_;
   c.columns = float(output_columns_);
   c.full_revolution = full_revolution_;
-  detail::organizerKernel(c, bx, by, bz, padded, bw, bt, status, table_cell, column_code);
+  c.row_table = row_table_.data();
+  c.mid_a = mid_a_.data();
+  c.mid_h = mid_h_.data();
+  int* rows = block_row_.data();
+  detail::organizerKernel(c, bx, by, bz, padded, bw, bt, status, table_cell, column_code, rows);
   const bool full = full_revolution_;
 
   // Placement, in input order: the first point takes its cell, a later one a free neighbour or,
@@ -463,7 +507,6 @@ void RangeImageOrganizer<PointT>::placeBlock(std::size_t begin, std::size_t end)
   const int columns = output_columns_;
   int* index_image = index_image_.data();
   int* cell_of_point = cell_of_point_.data();
-  const std::uint16_t* row_table = row_table_.data();
   auto range2Of = [&](int index) {
     const PointT& q = in[index];
     return (q.x * q.x + q.y * q.y) + q.z * q.z;
@@ -477,14 +520,9 @@ void RangeImageOrganizer<PointT>::placeBlock(std::size_t begin, std::size_t end)
         ++out_of_view_;
       continue;
     }
-    const float w = bw[k], t = bt[k];
-    int row;
-    const std::uint16_t entry =
-        table_cell[k] >= 0 ? row_table[table_cell[k]] : detail::kTableAmbiguous;
-    if (entry != detail::kTableAmbiguous)
-      row = int(entry) + (t < mid_a_[entry] + mid_h_[entry] * w ? 1 : 0);
-    else
-      row = rowBySearch(w, t);
+
+    int row = rows[k];
+    if (row < 0) row = rowBySearch(bw[k], bt[k]);
     const int column = column_code[k] >> 1;
     const int base = row * columns;
     const int cell = base + column;
@@ -597,7 +635,7 @@ void RangeImageOrganizer<PointT>::organize(PointCloud& output) {
   cell_of_point_.assign(input_->size(), -1);
   for (auto* block : {&block_x_, &block_y_, &block_z_, &block_w_, &block_t_})
     block->resize(detail::kOrganizerBlock);
-  for (auto* block : {&block_status_, &block_table_, &block_column_})
+  for (auto* block : {&block_status_, &block_table_, &block_column_, &block_row_})
     block->resize(detail::kOrganizerBlock);
 
   PointT empty;
