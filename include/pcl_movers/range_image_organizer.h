@@ -32,6 +32,11 @@ namespace pcl_movers {
  * sensor's field of view, no sensor model when estimation is off; `output` is then left as it was.
  * NaN/Inf points are skipped and counted (getInvalidCount()).
  *
+ * Keep one organizer for a whole sequence: the row/column lookups of the model and all buffers
+ * are kept from frame to frame (rebuilt only when the model or the width change). The per-point
+ * arithmetic runs 4 points at a time (SSE2), or 8 with AVX2 when the CPU has it (chosen at run
+ * time); both give the results of the scalar code bit for bit.
+ *
  * \code
  * pcl_movers::RangeImageOrganizer<pcl::PointXYZI> organizer;
  * organizer.setInputCloud(scan);
