@@ -64,22 +64,6 @@ void printHelp(const char* argv0) {
 
 using pcl_movers::tools::parseNumber;
 
-/** Reads a scan and rejects what cannot be processed, naming the file and the problem. */
-Cloud::Ptr readChecked(const std::string& path) {
-  Cloud::Ptr cloud(new Cloud);
-  pcl_movers::io::readScan(path, *cloud);
-  if (cloud->empty()) throw InputError(path, 0, "the cloud is empty");
-  std::size_t finite = 0;
-  for (std::size_t i = 0; i < cloud->size(); ++i) {
-    const auto& p = (*cloud)[i];
-    if (std::isinf(p.x) || std::isinf(p.y) || std::isinf(p.z))
-      throw InputError(path, 0, "point " + std::to_string(i) + " has an infinite coordinate");
-    if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)) ++finite;
-  }
-  if (finite == 0) throw InputError(path, 0, "no finite point (all NaN)");
-  return cloud;
-}
-
 /** Files and the folder this run created, removed again if it fails: no half-written output. */
 class OutputGuard {
  public:
@@ -171,7 +155,7 @@ int run(int argc, char** argv) {
   std::size_t points = 0, kept = 0, displaced = 0, out_of_view = 0, invalid = 0, passed = 0;
   pcl_movers::tools::ProgressBar bar(inputs.size());
   for (std::size_t i = 0; i < inputs.size(); ++i) {
-    const Cloud::Ptr cloud = readChecked(inputs[i]);
+    const Cloud::Ptr cloud = pcl_movers::tools::readScanChecked(inputs[i]);
     organizer.setInputCloud(cloud);
     Cloud image;
     organizer.organize(image);

@@ -4,6 +4,7 @@
 #include <pcl_movers/common.h>
 #include <pcl_movers/range_image_organizer.h>
 #include <pcl_movers/sensor_model.h>
+#include <pcl_movers/impl/range_image_organizer.hpp>
 
 #include <gtest/gtest.h>
 #include <pcl/io/pcd_io.h>
@@ -326,6 +327,189 @@ TEST(RangeImageOrganizer, WorksForPointXYZ) {
   organizer.organize(out);
   EXPECT_EQ(out.height, 32u);
   EXPECT_EQ(organizer.getCellOfPoint()[0], 3 * model.columns() + model.columnOf(0.f));
+}
+
+TEST(RangeImageOrganizer, VectorizedKernelMatchesTheScalarReference) {
+  // The SIMD kernel (SSE2, or AVX2 when the CPU has it) must give bit-identical results to the
+  // scalar loop, including NaN/Inf, the origin, far points and the padding lanes.
+  pcl_movers::detail::OrganizerKernelParams c;
+  c.max_range2 = 80.f * 80.f;
+  c.min_range2 = 0.5f * 0.5f;
+  c.upper_limit = 0.04f;
+  c.upper_offset = 0.21f;
+  c.lower_limit = -0.47f;
+  c.lower_offset = 0.12f;
+  c.mean_offset = 0.16f;
+  c.g_min = -0.6f;
+  c.g_scale = 800.f;
+  c.g_bins = 560.f;
+  c.w_scale = 32.f;
+  c.w_bins = 32.f;
+  c.azimuth_max = float(M_PI);
+  c.columns_per_radian = 2200.f / float(2 * M_PI);
+  c.columns = 2200.f;
+  std::mt19937 rng(11);
+  // A random row table (with ambiguous cells) and mid-lines: only the lookup is compared here.
+  std::vector<std::uint16_t> table(560 * 32 + 1);
+  for (auto& e : table)
+    e = rng() % 10 == 0 ? pcl_movers::detail::kTableAmbiguous : std::uint16_t(rng() % 64);
+  std::vector<float> mid_a(64), mid_h(64);
+  for (int k = 0; k < 64; ++k) {
+    mid_a[k] = 0.03f - 0.0075f * float(k) + 0.002f * float(rng() % 100) / 100.f;
+    mid_h[k] = 0.1f + 0.1f * float(rng() % 100) / 100.f;
+  }
+  c.row_table = table.data();
+  c.mid_a = mid_a.data();
+  c.mid_h = mid_h.data();
+  std::uniform_real_distribution<float> u(-90.f, 90.f), uz(-4.f, 2.f);
+  const std::size_t n = 4096;
+  std::vector<float> x(n), y(n), z(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    x[i] = u(rng);
+    y[i] = u(rng);
+    z[i] = uz(rng);
+  }
+  const float inf = std::numeric_limits<float>::infinity(), nan = std::nanf("");
+  const float specials[][3] = {{nan, 1, 1},   {1, inf, 1},       {1, 1, -inf},
+                               {0, 0, 1},     {0, 0, 0},         {-1, 0, 0},
+                               {-1, -0.f, 0}, {1e30f, 1e30f, 0}, {0.3f, 0.1f, 0}};
+  for (std::size_t i = 0; i < sizeof(specials) / sizeof(specials[0]); ++i) {
+    x[i * 7] = specials[i][0];
+    y[i * 7] = specials[i][1];
+    z[i * 7] = specials[i][2];
+  }
+  for (const bool full : {true, false}) {
+    c.full_revolution = full;
+    if (!full) {
+      c.azimuth_max = float(M_PI / 4);
+      c.columns_per_radian = 360.f / float(M_PI / 2);
+      c.columns = 360.f;
+    }
+    std::vector<float> w1(n), t1(n), w2(n), t2(n);
+    std::vector<int> s1(n), s2(n), g1(n), g2(n), c1(n), c2(n), r1(n), r2(n);
+    pcl_movers::detail::organizerKernelScalar(c, x.data(), y.data(), z.data(), n, w1.data(),
+                                              t1.data(), s1.data(), g1.data(), c1.data(),
+                                              r1.data());
+    pcl_movers::detail::organizerKernel(c, x.data(), y.data(), z.data(), n, w2.data(), t2.data(),
+                                        s2.data(), g2.data(), c2.data(), r2.data());
+    std::size_t placed = 0, resolved = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      ASSERT_EQ(s1[i], s2[i]) << i;
+      if (s1[i] != 0) continue;
+      ++placed;
+      ASSERT_EQ(w1[i], w2[i]) << i;
+      ASSERT_EQ(t1[i], t2[i]) << i;
+      ASSERT_EQ(g1[i], g2[i]) << i;
+      ASSERT_EQ(c1[i], c2[i]) << i;
+      ASSERT_EQ(r1[i], r2[i]) << i;
+      resolved += r1[i] >= 0;
+    }
+    EXPECT_GT(placed, n / 10);  // the comparison covered real points
+    EXPECT_GT(resolved, placed / 2);
+    EXPECT_EQ(s1[0], 1);      // NaN
+    EXPECT_EQ(s1[3 * 7], 2);  // on the z axis: no azimuth
+  }
+}
+
+TEST(RangeImageOrganizer, FastAnglesAndRowTableMatchTheExactAssignment) {
+  // Random points around every beam of the HDL-64E (uneven beams, two offset blocks), from 1.5 m
+  // (nearer than the row table reaches) to 80 m: the row must be SensorModel::rowOfPoint's and
+  // the column that of std::atan2, except within a tiny fraction of a column of its border.
+  const SensorModel model = SensorModel::hdl64();
+  std::mt19937 rng(12);
+  std::uniform_real_distribution<float> unit(0.f, 1.f);
+  Cloud::Ptr cloud(new Cloud);
+  for (int i = 0; i < 60000; ++i) {
+    const int k = int(unit(rng) * 64.f) % 64;
+    const float rho = 1.5f + 78.5f * unit(rng) * unit(rng);
+    const float a = float(M_PI) * (2.f * unit(rng) - 1.f);
+    // Up to 40 % of the way to the neighbouring beam: clear of the half-way line.
+    const float spacing = k > 0 ? model.elevations()[k - 1] - model.elevations()[k]
+                                : model.elevations()[0] - model.elevations()[1];
+    const float e = model.elevations()[k] + 0.8f * (unit(rng) - 0.5f) * spacing;
+    pcl::PointXYZI p;
+    p.x = rho * std::cos(a);
+    p.y = rho * std::sin(a);
+    p.z = rho * std::tan(e) + model.verticalOffsets()[k];
+    cloud->push_back(p);
+  }
+  RangeImageOrganizer<pcl::PointXYZI> organizer;
+  organizer.setSensorModel(model);
+  organizer.setUseFreeNeighbour(false);
+  organizer.setInputCloud(cloud);
+  Cloud out;
+  organizer.organize(out);
+  const int columns = int(out.width);
+  std::size_t checked = 0, near_border = 0;
+  for (std::size_t i = 0; i < cloud->size(); ++i) {
+    const auto& p = (*cloud)[i];
+    const float rho = std::sqrt(p.x * p.x + p.y * p.y);
+    const int exact_row = model.rowOfPoint(rho, p.z);
+    const int cell = organizer.getCellOfPoint()[i];
+    if (cell < 0) {
+      EXPECT_GE(exact_row, 0);  // lost to a nearer point, not rejected
+      continue;
+    }
+    ASSERT_EQ(cell / columns, exact_row) << "point " << i << " rho " << rho;
+    double f = (M_PI - std::atan2(double(p.y), double(p.x))) * columns / (2 * M_PI);
+    if (f >= columns) f -= columns;
+    if (std::abs(f - std::round(f)) < 2e-3) {
+      ++near_border;
+      continue;
+    }
+    ASSERT_EQ(cell % columns, int(f)) << "point " << i << " f " << f;
+    ++checked;
+  }
+  EXPECT_GT(checked, 40000u);
+  EXPECT_LT(near_border, 500u);
+  EXPECT_EQ(organizer.getDisplacedCount() + checked + near_border, cloud->size());
+}
+
+TEST(RangeImageOrganizer, ReusedOrganizerMatchesAFreshOne) {
+  // One organizer over frames of different sizes, a width change and a model change must give
+  // what a new organizer gives for each: buffers and lookups are reused, never stale.
+  std::vector<Expected> expected;
+  const auto big = rings(SensorModel::hdl64(), expected, 21, 0.6f);
+  const auto small = rings(SensorModel::hdl64(), expected, 22, 0.05f);
+  const auto vlp = rings(SensorModel::vlp16(), expected, 23, 0.8f);
+  struct Step {
+    Cloud::Ptr cloud;
+    SensorModel model;
+    int columns;
+  };
+  const std::vector<Step> steps = {
+      {big, SensorModel::hdl64(), 0}, {small, SensorModel::hdl64(), 0},
+      {big, SensorModel::hdl64(), 0}, {big, SensorModel::hdl64(), 2048},
+      {vlp, SensorModel::vlp16(), 0}, {small, SensorModel::hdl64(), 0}};
+  RangeImageOrganizer<pcl::PointXYZI> reused;
+  Cloud reused_out;
+  for (std::size_t s = 0; s < steps.size(); ++s) {
+    SCOPED_TRACE("step " + std::to_string(s));
+    const Step& step = steps[s];
+    reused.setSensorModel(step.model);
+    reused.setColumns(step.columns);
+    reused.setInputCloud(step.cloud);
+    reused.organize(reused_out);
+    RangeImageOrganizer<pcl::PointXYZI> fresh;
+    fresh.setSensorModel(step.model);
+    fresh.setColumns(step.columns);
+    fresh.setInputCloud(step.cloud);
+    Cloud fresh_out;
+    fresh.organize(fresh_out);
+    ASSERT_EQ(reused_out.width, fresh_out.width);
+    ASSERT_EQ(reused_out.height, fresh_out.height);
+    EXPECT_EQ(reused.getIndexImage(), fresh.getIndexImage());
+    EXPECT_EQ(reused.getCellOfPoint(), fresh.getCellOfPoint());
+    EXPECT_EQ(reused.getShiftedCount(), fresh.getShiftedCount());
+    EXPECT_EQ(reused.getDisplacedCount(), fresh.getDisplacedCount());
+    for (std::size_t c = 0; c < fresh_out.size(); ++c) {
+      const auto& a = reused_out[c];
+      const auto& b = fresh_out[c];
+      ASSERT_TRUE((std::isnan(a.x) && std::isnan(b.x)) ||
+                  (a.x == b.x && a.intensity == b.intensity))
+          << "cell " << c;
+    }
+  }
 }
 
 /** The laser of each point from the recording order KITTI keeps (turns start at azimuth 0). */

@@ -2,6 +2,7 @@
  * SPDX-License-Identifier: BSD-3-Clause
  */
 #include <pcl_movers/common.h>
+#include <pcl_movers/io/sequence.h>
 #include <pcl_movers/sensor_model.h>
 
 #include <gtest/gtest.h>
@@ -196,6 +197,40 @@ TEST(SensorModel, EstimateOnRealKittiScanMatchesThePreset) {
     EXPECT_NEAR(estimated.elevations()[k] / kDeg, preset.elevations()[k] / kDeg, 0.1) << k;
     EXPECT_NEAR(estimated.verticalOffsets()[k], preset.verticalOffsets()[k], 0.03) << k;
   }
+}
+
+/** Estimates the layout from one real KITTI scan and compares it with the preset: 64 beams, each
+ * within 0.1° (the beams are >= 0.27° apart) and its vertical offset within 3 cm. */
+void expectEstimateMatchesPreset(const std::string& relative) {
+  const std::string path = std::string(PCL_MOVERS_SHARED_DATA) + "/" + relative;
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << "KITTI data not found: " << path;
+  pcl::PointCloud<pcl::PointXYZI> cloud;
+  pcl_movers::io::readScan(path, cloud);
+  const SensorModel estimated = SensorModel::estimate(cloud);
+  const SensorModel preset = SensorModel::hdl64();
+  ASSERT_EQ(estimated.rows(), 64) << path;
+  for (int k = 0; k < 64; ++k) {
+    EXPECT_NEAR(estimated.elevations()[k] / kDeg, preset.elevations()[k] / kDeg, 0.1) << k;
+    EXPECT_NEAR(estimated.verticalOffsets()[k], preset.verticalOffsets()[k], 0.03) << k;
+  }
+}
+
+TEST(SensorModel, EstimateOnKittiCity22MatchesThePreset) {
+  expectEstimateMatchesPreset("kitti-city-22/frames/000000.pcd");
+}
+
+TEST(SensorModel, EstimateOnKittiObject3MatchesThePreset) {
+  expectEstimateMatchesPreset("kitti-object-3/velodyne/000000.bin");
+}
+
+// Known miss of issue #2, kept visible as a disabled test (run with
+// --gtest_also_run_disabled_tests): on KITTI odometry 00 estimate() finds 27-48 of the 64 beams,
+// and on kitti-object-3/000002 57. The per-band offset search is pulled towards the height of
+// horizontal surfaces (the road: many beams' ground rings collapse into one bin when the offset
+// equals the ground's z), and even with the true offsets forced the lower beams of these scans
+// show up as split double peaks (~0.2° apart) that the peak finder rejects. See the report.
+TEST(SensorModel, DISABLED_EstimateOnKittiOdometry00MatchesThePreset) {
+  expectEstimateMatchesPreset("kitti-odometry-00/velodyne/000000.bin");
 }
 
 }  // namespace

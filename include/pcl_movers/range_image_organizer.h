@@ -9,6 +9,7 @@
 #include <pcl/point_cloud.h>
 
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 namespace pcl_movers {
@@ -30,6 +31,11 @@ namespace pcl_movers {
  * Bad input throws InputError from organize(): empty cloud, no finite point, no point inside the
  * sensor's field of view, no sensor model when estimation is off; `output` is then left as it was.
  * NaN/Inf points are skipped and counted (getInvalidCount()).
+ *
+ * Keep one organizer for a whole sequence: the row/column lookups of the model and all buffers
+ * are kept from frame to frame (rebuilt only when the model or the width change). The per-point
+ * arithmetic runs 4 points at a time (SSE2), or 8 with AVX2 when the CPU has it (chosen at run
+ * time); both give the results of the scalar code bit for bit.
  *
  * \code
  * pcl_movers::RangeImageOrganizer<pcl::PointXYZI> organizer;
@@ -104,10 +110,13 @@ class RangeImageOrganizer : public pcl::PCLBase<PointT> {
   using pcl::PCLBase<PointT>::initCompute;
   using pcl::PCLBase<PointT>::deinitCompute;
 
-  /** \brief Precomputes the row lookup of `model_` for `columns` columns. */
+  /** \brief Precomputes the row and column lookups of `model_` for `columns` columns. */
   void prepareLookup(int columns);
-  /** \brief Row of a point at horizontal distance with inverse `inv_rho` and height `z`, or -1. */
-  inline int rowOf(float inv_rho, float z) const;
+  /** \brief Row of the beam line nearest to (w = 1/ρ, t = z/ρ) by bisection over the lines
+   * half-way between neighbouring beams (no table; used where the table is ambiguous). */
+  inline int rowBySearch(float w, float t) const;
+  /** \brief Places the points `begin`..`end` of the loop over the input (or its indices). */
+  void placeBlock(std::size_t begin, std::size_t end);
   void passThrough(PointCloud& output);
 
   SensorModel model_;
@@ -120,20 +129,29 @@ class RangeImageOrganizer : public pcl::PCLBase<PointT> {
 
   std::vector<int> index_image_;
   std::vector<int> cell_of_point_;
-  std::vector<float> cell_range_;
-  PointCloud image_;  ///< built here, then swapped into the output
-  std::size_t displaced_ = 0, shifted_ = 0, invalid_ = 0, out_of_view_ = 0;
+  PointCloud image_;  ///< scratch output for organize(*input), swapped into place
+  std::size_t displaced_ = 0, shifted_ = 0, invalid_ = 0, out_of_view_ = 0, placed_ = 0;
   bool pass_through_ = false;
 
-  // Lookup: g = (z - mean offset) / ρ sampled finely → the row to start the exact search from.
-  std::vector<float> tan_elevation_, offset_;
-  std::vector<int> row_table_;
-  float mean_offset_ = 0.f, table_min_ = 0.f, table_scale_ = 0.f;
+  // Lookups of the current model, rebuilt only when the model or the column count change (a
+  // caller organizes one frame after the other with the same sensor).
+  bool lookup_ready_ = false;
+  // Row of a point: beam k is the line t = tan θ_k + h_k·w of (w = 1/ρ, t = z/ρ); the row is the
+  // number of mid-lines (half-way between beams k and k+1: t = mid_a_k + mid_h_k·w) above t. A 2D
+  // table over (g = t - mean offset·w, w) gives for each cell the top row r of the at most two
+  // rows the cell holds; one comparison with mid-line r finishes the job (kTableAmbiguous: search).
+  std::vector<float> mid_a_, mid_h_;
+  std::vector<std::uint16_t> row_table_;
+  float mean_offset_ = 0.f, table_g_min_ = 0.f, table_g_scale_ = 0.f, table_w_scale_ = 0.f;
+  int table_g_bins_ = 0, table_w_bins_ = 0;
   float upper_limit_ = 0.f, lower_limit_ = 0.f;  // half a spacing outside the outer beams, in t
   float upper_offset_ = 0.f, lower_offset_ = 0.f;
   float azimuth_max_ = 0.f, columns_per_radian_ = 0.f;
   int output_columns_ = 0;
   bool full_revolution_ = true;
+  // Per-block scratch of the vectorized first pass (structure of arrays).
+  std::vector<float> block_x_, block_y_, block_z_, block_w_, block_t_;
+  std::vector<int> block_status_, block_table_, block_column_, block_row_;
 };
 
 }  // namespace pcl_movers

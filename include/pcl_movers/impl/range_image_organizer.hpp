@@ -12,6 +12,13 @@
 #include <limits>
 #include <string>
 
+#if defined(__SSE2__) || defined(_M_X64)
+#include <emmintrin.h>
+#endif
+#if defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
+#include <immintrin.h>
+#endif
+
 namespace pcl_movers {
 
 namespace detail {
@@ -22,7 +29,7 @@ namespace detail {
 inline float fastAtan2(float y, float x) {
   const float ax = std::abs(x), ay = std::abs(y);
   const float mx = std::max(ax, ay), mn = std::min(ax, ay);
-  const float a = mx > 0.f ? mn / mx : 0.f;
+  const float a = mn / (mx > 0.f ? mx : 1.f);  // 0 at the origin; no branch around the division
   const float s = a * a;
   float r = (((((-0.01172120f * s + 0.05265332f) * s - 0.11643287f) * s + 0.19354346f) * s -
               0.33262347f) *
@@ -34,6 +41,305 @@ inline float fastAtan2(float y, float x) {
   return y < 0.f ? -r : r;
 }
 
+/** \brief Sentinel of RangeImageOrganizer's row table: the cell holds more than two rows. */
+constexpr std::uint16_t kTableAmbiguous = 0xFFFF;
+/** \brief Points per block of the organizer's vectorized first pass (its scratch stays in L1). */
+constexpr std::size_t kOrganizerBlock = 256;
+
+/** \brief Constants of the organizer's per-point pass (organizerKernel). */
+struct OrganizerKernelParams {
+  float max_range2, min_range2;
+  float upper_limit, upper_offset, lower_limit, lower_offset;  ///< field of view in t = z/ρ
+  float mean_offset, g_min, g_scale, g_bins, w_scale, w_bins;  ///< row table (g, w) cells
+  float azimuth_max, columns_per_radian, columns;
+  bool full_revolution;
+  /// Row table (padded by one entry) and mid-lines: rows are resolved where the table is unique.
+  const std::uint16_t* row_table;
+  const float* mid_a;
+  const float* mid_h;
+};
+
+/** \brief Row of each point from the table cell: the cell's top row, one lower when t is below
+ * that row's mid-line; -1 where the table has no unique answer (the caller searches). */
+inline void organizerResolveRows(const OrganizerKernelParams& c, std::size_t begin, std::size_t m,
+                                 const float* ws, const float* ts, const int* table_cell,
+                                 int* rows) {
+  for (std::size_t k = begin; k < m; ++k) {
+    const std::uint16_t entry = table_cell[k] >= 0 ? c.row_table[table_cell[k]] : kTableAmbiguous;
+    rows[k] = entry == kTableAmbiguous
+                  ? -1
+                  : int(entry) + (ts[k] < c.mid_a[entry] + c.mid_h[entry] * ws[k] ? 1 : 0);
+  }
+}
+
+/** \brief The per-point arithmetic of RangeImageOrganizer for `m` points given as arrays x, y, z:
+ * w = 1/ρ, t = z/ρ, status (0 placed, 1 not finite, 2 outside range or view), the row-table cell
+ * (-1: search instead), and column·2 + (1 when the azimuth leans to the next column). Plain
+ * scalar reference; organizerKernel is the same arithmetic four points at a time. */
+inline void organizerKernelScalar(const OrganizerKernelParams& c, const float* xs, const float* ys,
+                                  const float* zs, std::size_t m, float* ws, float* ts, int* status,
+                                  int* table_cell, int* column_code, int* rows) {
+  for (std::size_t k = 0; k < m; ++k) {
+    const float x = xs[k], y = ys[k], z = zs[k];
+    // x - x is 0 for finite x, NaN for NaN and ±Inf.
+    const bool finite = ((x - x) + (y - y) + (z - z)) == 0.f;
+    const float rho2 = x * x + y * y;
+    const float range2 = rho2 + z * z;
+    const bool in_range = range2 <= c.max_range2 && range2 >= c.min_range2 && rho2 > 0.f;
+    const float w = 1.f / std::sqrt(rho2);
+    const float t = z * w;
+    const bool in_beams =
+        t <= c.upper_limit + c.upper_offset * w && t >= c.lower_limit + c.lower_offset * w;
+    // Table cell; NaN and out-of-table values compare false and go to the search (-1).
+    const float gf = (t - c.mean_offset * w - c.g_min) * c.g_scale;
+    const float wf = w * c.w_scale;
+    const bool in_table = gf >= 0.f && gf < c.g_bins && wf >= 0.f && wf < c.w_bins;
+    const float gi = float(int(in_table ? gf : 0.f)), wi = float(int(in_table ? wf : 0.f));
+    table_cell[k] = in_table ? int(wi * c.g_bins + gi) : -1;
+    // Column: azimuth decreases with the column index (SensorModel).
+    float f = (c.azimuth_max - fastAtan2(y, x)) * c.columns_per_radian;
+    if (c.full_revolution) {
+      f = f < 0.f ? f + c.columns : f;
+      f = f >= c.columns ? f - c.columns : f;
+    }
+    const bool in_fov = f >= 0.f && f < c.columns;
+    const float fc = in_fov ? f : 0.f;
+    const int column = int(fc);  // < columns, since fc < columns
+    column_code[k] = column * 2 + ((fc - float(column)) >= 0.5f ? 1 : 0);
+    ws[k] = w;
+    ts[k] = t;
+    status[k] = !finite ? 1 : ((in_range && in_beams && in_fov) ? 0 : 2);
+  }
+  organizerResolveRows(c, 0, m, ws, ts, table_cell, rows);
+}
+
+#if defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
+#define PCL_MOVERS_ORGANIZER_AVX2 1
+/** \brief Lane-wise mask ? a : b. */
+__attribute__((target("avx2"))) inline __m256 organizerSelect256(__m256 mask, __m256 a, __m256 b) {
+  return _mm256_or_ps(_mm256_and_ps(mask, a), _mm256_andnot_ps(mask, b));
+}
+
+/** \brief organizerKernel eight points at a time, for CPUs with AVX2 (chosen at run time: the
+ * library is built for plain x86-64). Same operations, same order, no FMA: identical results.
+ * `m` must be a multiple of 8. */
+__attribute__((target("avx2"))) inline void organizerKernelAvx2(const OrganizerKernelParams& c,
+                                                                const float* xs, const float* ys,
+                                                                const float* zs, std::size_t m,
+                                                                float* ws, float* ts, int* status,
+                                                                int* table_cell, int* column_code,
+                                                                int* rows) {
+  const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.f), half = _mm256_set1_ps(0.5f);
+  const __m256 sign = _mm256_set1_ps(-0.f);
+  const __m256 max_range2 = _mm256_set1_ps(c.max_range2), min_range2 = _mm256_set1_ps(c.min_range2);
+  const __m256 upper_limit = _mm256_set1_ps(c.upper_limit),
+               upper_offset = _mm256_set1_ps(c.upper_offset);
+  const __m256 lower_limit = _mm256_set1_ps(c.lower_limit),
+               lower_offset = _mm256_set1_ps(c.lower_offset);
+  const __m256 mean_offset = _mm256_set1_ps(c.mean_offset), g_min = _mm256_set1_ps(c.g_min);
+  const __m256 g_scale = _mm256_set1_ps(c.g_scale), g_bins = _mm256_set1_ps(c.g_bins);
+  const __m256 w_scale = _mm256_set1_ps(c.w_scale), w_bins = _mm256_set1_ps(c.w_bins);
+  const __m256 azimuth_max = _mm256_set1_ps(c.azimuth_max);
+  const __m256 columns_per_radian = _mm256_set1_ps(c.columns_per_radian);
+  const __m256 columns = _mm256_set1_ps(c.columns);
+  const __m256 full = c.full_revolution ? _mm256_castsi256_ps(_mm256_set1_epi32(-1)) : zero;
+  for (std::size_t k = 0; k < m; k += 8) {
+    const __m256 x = _mm256_loadu_ps(xs + k), y = _mm256_loadu_ps(ys + k),
+                 z = _mm256_loadu_ps(zs + k);
+    const __m256 finite = _mm256_cmp_ps(
+        _mm256_add_ps(_mm256_add_ps(_mm256_sub_ps(x, x), _mm256_sub_ps(y, y)), _mm256_sub_ps(z, z)),
+        zero, _CMP_EQ_OQ);
+    const __m256 rho2 = _mm256_add_ps(_mm256_mul_ps(x, x), _mm256_mul_ps(y, y));
+    const __m256 range2 = _mm256_add_ps(rho2, _mm256_mul_ps(z, z));
+    const __m256 in_range =
+        _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(range2, max_range2, _CMP_LE_OQ),
+                                    _mm256_cmp_ps(range2, min_range2, _CMP_GE_OQ)),
+                      _mm256_cmp_ps(rho2, zero, _CMP_GT_OQ));
+    const __m256 w = _mm256_div_ps(one, _mm256_sqrt_ps(rho2));
+    const __m256 t = _mm256_mul_ps(z, w);
+    const __m256 in_beams = _mm256_and_ps(
+        _mm256_cmp_ps(t, _mm256_add_ps(upper_limit, _mm256_mul_ps(upper_offset, w)), _CMP_LE_OQ),
+        _mm256_cmp_ps(t, _mm256_add_ps(lower_limit, _mm256_mul_ps(lower_offset, w)), _CMP_GE_OQ));
+    const __m256 gf = _mm256_mul_ps(
+        _mm256_sub_ps(_mm256_sub_ps(t, _mm256_mul_ps(mean_offset, w)), g_min), g_scale);
+    const __m256 wf = _mm256_mul_ps(w, w_scale);
+    const __m256 in_table = _mm256_and_ps(
+        _mm256_and_ps(_mm256_cmp_ps(gf, zero, _CMP_GE_OQ), _mm256_cmp_ps(gf, g_bins, _CMP_LT_OQ)),
+        _mm256_and_ps(_mm256_cmp_ps(wf, zero, _CMP_GE_OQ), _mm256_cmp_ps(wf, w_bins, _CMP_LT_OQ)));
+    const __m256 gi = _mm256_cvtepi32_ps(_mm256_cvttps_epi32(_mm256_and_ps(in_table, gf)));
+    const __m256 wi = _mm256_cvtepi32_ps(_mm256_cvttps_epi32(_mm256_and_ps(in_table, wf)));
+    const __m256i cell = _mm256_cvttps_epi32(_mm256_add_ps(_mm256_mul_ps(wi, g_bins), gi));
+    _mm256_storeu_si256(
+        reinterpret_cast<__m256i*>(table_cell + k),
+        _mm256_or_si256(_mm256_and_si256(_mm256_castps_si256(in_table), cell),
+                        _mm256_andnot_si256(_mm256_castps_si256(in_table), _mm256_set1_epi32(-1))));
+    {
+      // organizerResolveRows with gathers: the 16-bit entry read as the low half of 32 bits (the
+      // table has a padding entry), then the mid-line of the entry's row.
+      const __m256i table_mask = _mm256_castps_si256(in_table);
+      const __m256i cell_index = _mm256_and_si256(table_mask, cell);
+      const __m256i raw = _mm256_mask_i32gather_epi32(_mm256_set1_epi32(-1),
+                                                      reinterpret_cast<const int*>(c.row_table),
+                                                      cell_index, table_mask, 2);
+      const __m256i entry = _mm256_and_si256(raw, _mm256_set1_epi32(0xFFFF));
+      const __m256i ambiguous = _mm256_cmpeq_epi32(entry, _mm256_set1_epi32(0xFFFF));
+      const __m256i row_index = _mm256_andnot_si256(ambiguous, entry);
+      const __m256 mid_a = _mm256_i32gather_ps(c.mid_a, row_index, 4);
+      const __m256 mid_h = _mm256_i32gather_ps(c.mid_h, row_index, 4);
+      const __m256 below =
+          _mm256_cmp_ps(t, _mm256_add_ps(mid_a, _mm256_mul_ps(mid_h, w)), _CMP_LT_OQ);
+      const __m256i row = _mm256_sub_epi32(row_index, _mm256_castps_si256(below));
+      _mm256_storeu_si256(reinterpret_cast<__m256i*>(rows + k),
+                          _mm256_or_si256(ambiguous, _mm256_andnot_si256(ambiguous, row)));
+    }
+    // fastAtan2, lane-wise.
+    const __m256 ax = _mm256_andnot_ps(sign, x), ay = _mm256_andnot_ps(sign, y);
+    const __m256 mx = _mm256_max_ps(ax, ay), mn = _mm256_min_ps(ax, ay);
+    const __m256 a =
+        _mm256_div_ps(mn, organizerSelect256(_mm256_cmp_ps(mx, zero, _CMP_GT_OQ), mx, one));
+    const __m256 s = _mm256_mul_ps(a, a);
+    __m256 r =
+        _mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(-0.01172120f), s), _mm256_set1_ps(0.05265332f));
+    r = _mm256_sub_ps(_mm256_mul_ps(r, s), _mm256_set1_ps(0.11643287f));
+    r = _mm256_add_ps(_mm256_mul_ps(r, s), _mm256_set1_ps(0.19354346f));
+    r = _mm256_sub_ps(_mm256_mul_ps(r, s), _mm256_set1_ps(0.33262347f));
+    r = _mm256_add_ps(_mm256_mul_ps(r, s), _mm256_set1_ps(0.99997726f));
+    r = _mm256_mul_ps(r, a);
+    r = organizerSelect256(_mm256_cmp_ps(ay, ax, _CMP_GT_OQ),
+                           _mm256_sub_ps(_mm256_set1_ps(1.57079637f), r), r);
+    r = organizerSelect256(_mm256_cmp_ps(x, zero, _CMP_LT_OQ),
+                           _mm256_sub_ps(_mm256_set1_ps(3.14159274f), r), r);
+    r = organizerSelect256(_mm256_cmp_ps(y, zero, _CMP_LT_OQ), _mm256_xor_ps(r, sign), r);
+    __m256 f = _mm256_mul_ps(_mm256_sub_ps(azimuth_max, r), columns_per_radian);
+    f = organizerSelect256(_mm256_and_ps(full, _mm256_cmp_ps(f, zero, _CMP_LT_OQ)),
+                           _mm256_add_ps(f, columns), f);
+    f = organizerSelect256(_mm256_and_ps(full, _mm256_cmp_ps(f, columns, _CMP_GE_OQ)),
+                           _mm256_sub_ps(f, columns), f);
+    const __m256 in_fov =
+        _mm256_and_ps(_mm256_cmp_ps(f, zero, _CMP_GE_OQ), _mm256_cmp_ps(f, columns, _CMP_LT_OQ));
+    const __m256 fc = _mm256_and_ps(in_fov, f);
+    const __m256i column = _mm256_cvttps_epi32(fc);
+    const __m256 lean =
+        _mm256_cmp_ps(_mm256_sub_ps(fc, _mm256_cvtepi32_ps(column)), half, _CMP_GE_OQ);
+    _mm256_storeu_si256(
+        reinterpret_cast<__m256i*>(column_code + k),
+        _mm256_add_epi32(_mm256_slli_epi32(column, 1),
+                         _mm256_and_si256(_mm256_castps_si256(lean), _mm256_set1_epi32(1))));
+    _mm256_storeu_ps(ws + k, w);
+    _mm256_storeu_ps(ts + k, t);
+    const __m256i ok =
+        _mm256_castps_si256(_mm256_and_ps(_mm256_and_ps(in_range, in_beams), in_fov));
+    const __m256i fin = _mm256_castps_si256(finite);
+    // finite ? (ok ? 0 : 2) : 1
+    const __m256i st =
+        _mm256_or_si256(_mm256_andnot_si256(fin, _mm256_set1_epi32(1)),
+                        _mm256_and_si256(fin, _mm256_andnot_si256(ok, _mm256_set1_epi32(2))));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(status + k), st);
+  }
+}
+
+/** \brief True when the CPU runs AVX2 (checked once). */
+inline bool organizerHasAvx2() {
+  static const bool has = __builtin_cpu_supports("avx2");
+  return has;
+}
+#endif
+
+/** \brief organizerKernelScalar four points at a time with SSE2 (every x86-64 CPU has it; the
+ * compiler cannot vectorize the scalar loop itself because of sqrt's errno). The results are
+ * identical: the same IEEE operations in the same order. `m` must be a multiple of 4 (pad the
+ * arrays). Falls back to the scalar loop elsewhere. */
+inline void organizerKernel(const OrganizerKernelParams& c, const float* xs, const float* ys,
+                            const float* zs, std::size_t m, float* ws, float* ts, int* status,
+                            int* table_cell, int* column_code, int* rows) {
+#if defined(PCL_MOVERS_ORGANIZER_AVX2)
+  if (organizerHasAvx2() && m % 8 == 0) {
+    organizerKernelAvx2(c, xs, ys, zs, m, ws, ts, status, table_cell, column_code, rows);
+    return;
+  }
+#endif
+#if defined(__SSE2__) || defined(_M_X64)
+  const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.f), half = _mm_set1_ps(0.5f);
+  const __m128 sign = _mm_set1_ps(-0.f);
+  const __m128 max_range2 = _mm_set1_ps(c.max_range2), min_range2 = _mm_set1_ps(c.min_range2);
+  const __m128 upper_limit = _mm_set1_ps(c.upper_limit), upper_offset = _mm_set1_ps(c.upper_offset);
+  const __m128 lower_limit = _mm_set1_ps(c.lower_limit), lower_offset = _mm_set1_ps(c.lower_offset);
+  const __m128 mean_offset = _mm_set1_ps(c.mean_offset), g_min = _mm_set1_ps(c.g_min);
+  const __m128 g_scale = _mm_set1_ps(c.g_scale), g_bins = _mm_set1_ps(c.g_bins);
+  const __m128 w_scale = _mm_set1_ps(c.w_scale), w_bins = _mm_set1_ps(c.w_bins);
+  const __m128 azimuth_max = _mm_set1_ps(c.azimuth_max);
+  const __m128 columns_per_radian = _mm_set1_ps(c.columns_per_radian);
+  const __m128 columns = _mm_set1_ps(c.columns);
+  const __m128 full = c.full_revolution ? _mm_castsi128_ps(_mm_set1_epi32(-1)) : zero;
+  auto select = [](__m128 mask, __m128 a, __m128 b) {
+    return _mm_or_ps(_mm_and_ps(mask, a), _mm_andnot_ps(mask, b));
+  };
+  for (std::size_t k = 0; k < m; k += 4) {
+    const __m128 x = _mm_loadu_ps(xs + k), y = _mm_loadu_ps(ys + k), z = _mm_loadu_ps(zs + k);
+    const __m128 finite = _mm_cmpeq_ps(
+        _mm_add_ps(_mm_add_ps(_mm_sub_ps(x, x), _mm_sub_ps(y, y)), _mm_sub_ps(z, z)), zero);
+    const __m128 rho2 = _mm_add_ps(_mm_mul_ps(x, x), _mm_mul_ps(y, y));
+    const __m128 range2 = _mm_add_ps(rho2, _mm_mul_ps(z, z));
+    const __m128 in_range =
+        _mm_and_ps(_mm_and_ps(_mm_cmple_ps(range2, max_range2), _mm_cmpge_ps(range2, min_range2)),
+                   _mm_cmpgt_ps(rho2, zero));
+    const __m128 w = _mm_div_ps(one, _mm_sqrt_ps(rho2));
+    const __m128 t = _mm_mul_ps(z, w);
+    const __m128 in_beams =
+        _mm_and_ps(_mm_cmple_ps(t, _mm_add_ps(upper_limit, _mm_mul_ps(upper_offset, w))),
+                   _mm_cmpge_ps(t, _mm_add_ps(lower_limit, _mm_mul_ps(lower_offset, w))));
+    const __m128 gf =
+        _mm_mul_ps(_mm_sub_ps(_mm_sub_ps(t, _mm_mul_ps(mean_offset, w)), g_min), g_scale);
+    const __m128 wf = _mm_mul_ps(w, w_scale);
+    const __m128 in_table =
+        _mm_and_ps(_mm_and_ps(_mm_cmpge_ps(gf, zero), _mm_cmplt_ps(gf, g_bins)),
+                   _mm_and_ps(_mm_cmpge_ps(wf, zero), _mm_cmplt_ps(wf, w_bins)));
+    const __m128 gi = _mm_cvtepi32_ps(_mm_cvttps_epi32(_mm_and_ps(in_table, gf)));
+    const __m128 wi = _mm_cvtepi32_ps(_mm_cvttps_epi32(_mm_and_ps(in_table, wf)));
+    const __m128i cell = _mm_cvttps_epi32(_mm_add_ps(_mm_mul_ps(wi, g_bins), gi));
+    _mm_storeu_si128(
+        reinterpret_cast<__m128i*>(table_cell + k),
+        _mm_or_si128(_mm_and_si128(_mm_castps_si128(in_table), cell),
+                     _mm_andnot_si128(_mm_castps_si128(in_table), _mm_set1_epi32(-1))));
+    // fastAtan2, lane-wise.
+    const __m128 ax = _mm_andnot_ps(sign, x), ay = _mm_andnot_ps(sign, y);
+    const __m128 mx = _mm_max_ps(ax, ay), mn = _mm_min_ps(ax, ay);
+    const __m128 a = _mm_div_ps(mn, select(_mm_cmpgt_ps(mx, zero), mx, one));
+    const __m128 s = _mm_mul_ps(a, a);
+    __m128 r = _mm_add_ps(_mm_mul_ps(_mm_set1_ps(-0.01172120f), s), _mm_set1_ps(0.05265332f));
+    r = _mm_sub_ps(_mm_mul_ps(r, s), _mm_set1_ps(0.11643287f));
+    r = _mm_add_ps(_mm_mul_ps(r, s), _mm_set1_ps(0.19354346f));
+    r = _mm_sub_ps(_mm_mul_ps(r, s), _mm_set1_ps(0.33262347f));
+    r = _mm_add_ps(_mm_mul_ps(r, s), _mm_set1_ps(0.99997726f));
+    r = _mm_mul_ps(r, a);
+    r = select(_mm_cmpgt_ps(ay, ax), _mm_sub_ps(_mm_set1_ps(1.57079637f), r), r);
+    r = select(_mm_cmplt_ps(x, zero), _mm_sub_ps(_mm_set1_ps(3.14159274f), r), r);
+    r = select(_mm_cmplt_ps(y, zero), _mm_xor_ps(r, sign), r);
+    __m128 f = _mm_mul_ps(_mm_sub_ps(azimuth_max, r), columns_per_radian);
+    f = select(_mm_and_ps(full, _mm_cmplt_ps(f, zero)), _mm_add_ps(f, columns), f);
+    f = select(_mm_and_ps(full, _mm_cmpge_ps(f, columns)), _mm_sub_ps(f, columns), f);
+    const __m128 in_fov = _mm_and_ps(_mm_cmpge_ps(f, zero), _mm_cmplt_ps(f, columns));
+    const __m128 fc = _mm_and_ps(in_fov, f);
+    const __m128i column = _mm_cvttps_epi32(fc);
+    const __m128 lean = _mm_cmpge_ps(_mm_sub_ps(fc, _mm_cvtepi32_ps(column)), half);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(column_code + k),
+                     _mm_add_epi32(_mm_slli_epi32(column, 1),
+                                   _mm_and_si128(_mm_castps_si128(lean), _mm_set1_epi32(1))));
+    _mm_storeu_ps(ws + k, w);
+    _mm_storeu_ps(ts + k, t);
+    const __m128i ok = _mm_castps_si128(_mm_and_ps(_mm_and_ps(in_range, in_beams), in_fov));
+    const __m128i fin = _mm_castps_si128(finite);
+    // finite ? (ok ? 0 : 2) : 1
+    const __m128i st = _mm_or_si128(_mm_andnot_si128(fin, _mm_set1_epi32(1)),
+                                    _mm_and_si128(fin, _mm_andnot_si128(ok, _mm_set1_epi32(2))));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(status + k), st);
+  }
+  organizerResolveRows(c, 0, m, ws, ts, table_cell, rows);
+#else
+  organizerKernelScalar(c, xs, ys, zs, m, ws, ts, status, table_cell, column_code, rows);
+#endif
+}
+
 }  // namespace detail
 
 template <typename PointT>
@@ -43,84 +349,223 @@ void RangeImageOrganizer<PointT>::setSensorModel(const SensorModel& model) {
                      "' has no beams or no columns");
   model_ = model;
   has_model_ = true;
+  lookup_ready_ = false;
 }
 
 template <typename PointT>
 void RangeImageOrganizer<PointT>::clearSensorModel() {
   model_ = SensorModel();
   has_model_ = false;
+  lookup_ready_ = false;
 }
 
 template <typename PointT>
 void RangeImageOrganizer<PointT>::prepareLookup(int columns) {
   const int n = model_.rows();
-  tan_elevation_.resize(n);
-  offset_ = model_.verticalOffsets();
+  std::vector<float> tan_elevation(n);
+  const std::vector<float>& offset = model_.verticalOffsets();
   mean_offset_ = 0.f;
   for (int k = 0; k < n; ++k) {
-    tan_elevation_[k] = std::tan(model_.elevations()[k]);
-    mean_offset_ += offset_[k] / float(n);
+    tan_elevation[k] = std::tan(model_.elevations()[k]);
+    mean_offset_ += offset[k] / float(n);
   }
   // Half a beam spacing beyond the outer beams still belongs to them (as SensorModel::rowOf);
   // a single beam accepts one degree either way.
   const float one_degree = float(M_PI / 180.0);
-  const float upper_half = n > 1 ? 0.5f * (tan_elevation_[0] - tan_elevation_[1]) : one_degree;
+  const float upper_half = n > 1 ? 0.5f * (tan_elevation[0] - tan_elevation[1]) : one_degree;
   const float lower_half =
-      n > 1 ? 0.5f * (tan_elevation_[n - 2] - tan_elevation_[n - 1]) : one_degree;
-  upper_limit_ = tan_elevation_[0] + upper_half;
-  lower_limit_ = tan_elevation_[n - 1] - lower_half;
-  upper_offset_ = offset_[0];
-  lower_offset_ = offset_[n - 1];
-  // The table only has to land within a couple of rows of the answer; the walk in rowOf() does
-  // the rest exactly. Cells much finer than the tightest beam spacing keep the walk to ~1 step.
-  const float margin = 4.f * std::max(upper_half, lower_half) + 0.5f;
-  table_min_ = lower_limit_ - margin;
-  const float table_max = upper_limit_ + margin;
-  const int size = 16384;
-  table_scale_ = float(size) / (table_max - table_min_);
-  row_table_.resize(size);
-  int row = n - 1;
-  for (int i = 0; i < size; ++i) {
-    const float g = table_min_ + (float(i) + 0.5f) / table_scale_;
-    while (row > 0 && std::abs(g - tan_elevation_[row - 1]) <= std::abs(g - tan_elevation_[row]))
-      --row;
-    row_table_[i] = row;
+      n > 1 ? 0.5f * (tan_elevation[n - 2] - tan_elevation[n - 1]) : one_degree;
+  upper_limit_ = tan_elevation[0] + upper_half;
+  lower_limit_ = tan_elevation[n - 1] - lower_half;
+  upper_offset_ = offset[0];
+  lower_offset_ = offset[n - 1];
+
+  // Mid-lines between neighbouring beams; the last one is -inf so row n-1 never moves down.
+  mid_a_.assign(n, -std::numeric_limits<float>::infinity());
+  mid_h_.assign(n, 0.f);
+  float min_spacing = std::numeric_limits<float>::infinity(), max_slope = 0.f;
+  for (int k = 0; k + 1 < n; ++k) {
+    mid_a_[k] = 0.5f * (tan_elevation[k] + tan_elevation[k + 1]);
+    mid_h_[k] = 0.5f * (offset[k] + offset[k + 1]);
+    min_spacing = std::min(min_spacing, tan_elevation[k] - tan_elevation[k + 1]);
+    max_slope = std::max(max_slope, std::abs(mid_h_[k] - mean_offset_));
+  }
+  if (!std::isfinite(min_spacing) || !(min_spacing > 0.f)) min_spacing = one_degree;
+
+  // Table over g = t - mean offset·w (the mid-lines are nearly parallel in g) and w = 1/ρ up to
+  // 1/(1 m): cells a quarter of the tightest spacing tall and 1/32 m⁻¹ wide, where the mid-lines
+  // drift by max_slope/32, usually hold one mid-line at most. Points nearer than 1 m, or in the
+  // few cells with two mid-lines, are bisected.
+  constexpr float kTableMaxW = 1.f;
+  table_w_bins_ = 32;
+  table_w_scale_ = float(table_w_bins_) / kTableMaxW;
+  const float margin = max_slope * kTableMaxW + std::max(upper_half, lower_half);
+  table_g_min_ = lower_limit_ - margin;
+  const float g_max = upper_limit_ + margin;
+  const float g_cell = std::max(0.25f * min_spacing, (g_max - table_g_min_) / float(1 << 15));
+  table_g_bins_ = int(std::ceil((g_max - table_g_min_) / g_cell));
+  table_g_scale_ = float(table_g_bins_) / (g_max - table_g_min_);
+  // One padding entry: the vectorized lookup reads 32 bits at 16-bit entries.
+  row_table_.assign(std::size_t(table_g_bins_) * std::size_t(table_w_bins_) + 1,
+                    detail::kTableAmbiguous);
+  if (n < int(detail::kTableAmbiguous)) {
+    for (int j = 0; j < table_w_bins_; ++j) {
+      // Corners widened by 1 % of a cell: a point rounded into a neighbouring cell is covered.
+      const float w0 = std::max(0.f, (float(j) - 0.01f) / table_w_scale_);
+      const float w1 = (float(j) + 1.01f) / table_w_scale_;
+      for (int i = 0; i < table_g_bins_; ++i) {
+        const float g0 = table_g_min_ + (float(i) - 0.01f) / table_g_scale_;
+        const float g1 = table_g_min_ + (float(i) + 1.01f) / table_g_scale_;
+        // Rows grow as t falls: the top row is at the highest corner, the bottom one at the
+        // lowest (regions between straight mid-lines: the extremes are at corners).
+        int lo = n, hi = -1;
+        for (const float w : {w0, w1})
+          for (const float g : {g0, g1}) {
+            const int r = rowBySearch(w, g + mean_offset_ * w);
+            lo = std::min(lo, r);
+            hi = std::max(hi, r);
+          }
+        if (hi - lo <= 1)
+          row_table_[std::size_t(j) * std::size_t(table_g_bins_) + std::size_t(i)] =
+              std::uint16_t(lo);
+      }
+    }
   }
   output_columns_ = columns;
   full_revolution_ = model_.isFullRevolution();
   azimuth_max_ = model_.azimuthMax();
   columns_per_radian_ = float(columns) / (model_.azimuthMax() - model_.azimuthMin());
+  lookup_ready_ = true;
 }
 
 template <typename PointT>
-inline int RangeImageOrganizer<PointT>::rowOf(float inv_rho, float z) const {
-  const float t = z * inv_rho;
-  // Outside the outer beams' lines (each with its own offset) by more than half a spacing.
-  if (t > upper_limit_ + upper_offset_ * inv_rho || t < lower_limit_ + lower_offset_ * inv_rho)
-    return -1;
-  const float g = t - mean_offset_ * inv_rho;
-  int i = int((g - table_min_) * table_scale_);
-  i = std::min(std::max(i, 0), int(row_table_.size()) - 1);
-  int row = row_table_[i];
-  // Each beam is the line t = tan θ_k + h_k / ρ; the lines keep their order, so the nearest one
-  // is reached by walking downhill. (Walking only towards the point's side was measured slower:
-  // that side is a coin flip for the branch predictor, while here both loops usually stop at once.)
-  const int n = int(tan_elevation_.size());
-  auto distance = [&](int k) { return std::abs(t - tan_elevation_[k] - offset_[k] * inv_rho); };
-  float d = distance(row);
-  while (row > 0) {
-    const float up = distance(row - 1);
-    if (!(up < d)) break;
-    d = up;
-    --row;
+inline int RangeImageOrganizer<PointT>::rowBySearch(float w, float t) const {
+  // Row = number of mid-lines above t; they are ordered for w >= 0 (beams do not cross).
+  int lo = 0, hi = int(mid_a_.size()) - 1;  // the answer is in [lo, hi]
+  while (lo < hi) {
+    const int mid = (lo + hi) / 2;
+    if (t < mid_a_[mid] + mid_h_[mid] * w)
+      lo = mid + 1;
+    else
+      hi = mid;
   }
-  while (row < n - 1) {
-    const float down = distance(row + 1);
-    if (!(down < d)) break;
-    d = down;
-    ++row;
+  return lo;
+}
+
+template <typename PointT>
+void RangeImageOrganizer<PointT>::placeBlock(std::size_t begin, std::size_t end) {
+  const std::size_t m = end - begin;
+  float* bx = block_x_.data();
+  float* by = block_y_.data();
+  float* bz = block_z_.data();
+  float* bw = block_w_.data();
+  float* bt = block_t_.data();
+  int* status = block_status_.data();
+  int* table_cell = block_table_.data();
+  int* column_code = block_column_.data();
+  const PointT* in = input_->points.data();
+  const auto* indices = fake_indices_ ? nullptr : indices_->data();
+
+  // Gather into structure-of-arrays for the vectorized kernel; the padding lanes are NaN.
+  const std::size_t padded = (m + 7) & ~std::size_t(7);
+  for (std::size_t k = 0; k < m; ++k) {
+    const PointT& p = in[indices ? std::size_t((*indices_)[begin + k]) : begin + k];
+    bx[k] = p.x;
+    by[k] = p.y;
+    bz[k] = p.z;
   }
-  return row;
+  for (std::size_t k = m; k < padded; ++k)
+    bx[k] = by[k] = bz[k] = std::numeric_limits<float>::quiet_NaN();
+
+  detail::OrganizerKernelParams c;
+  c.max_range2 =
+      max_range_ > 0.f ? max_range_ * max_range_ : std::numeric_limits<float>::infinity();
+  c.min_range2 = min_range_ > 0.f ? min_range_ * min_range_ : 0.f;
+  c.upper_limit = upper_limit_;
+  c.upper_offset = upper_offset_;
+  c.lower_limit = lower_limit_;
+  c.lower_offset = lower_offset_;
+  c.mean_offset = mean_offset_;
+  c.g_min = table_g_min_;
+  c.g_scale = table_g_scale_;
+  c.g_bins = float(table_g_bins_);
+  c.w_scale = table_w_scale_;
+  c.w_bins = float(table_w_bins_);
+  c.azimuth_max = azimuth_max_;
+  c.columns_per_radian = columns_per_radian_;
+  c.columns = float(output_columns_);
+  c.full_revolution = full_revolution_;
+  c.row_table = row_table_.data();
+  c.mid_a = mid_a_.data();
+  c.mid_h = mid_h_.data();
+  int* rows = block_row_.data();
+  detail::organizerKernel(c, bx, by, bz, padded, bw, bt, status, table_cell, column_code, rows);
+  const bool full = full_revolution_;
+
+  // Placement, in input order: the first point takes its cell, a later one a free neighbour or,
+  // when nearer, the cell (a single-return range image keeps the nearest).
+  const int columns = output_columns_;
+  int* index_image = index_image_.data();
+  int* cell_of_point = cell_of_point_.data();
+  auto range2Of = [&](int index) {
+    const PointT& q = in[index];
+    return (q.x * q.x + q.y * q.y) + q.z * q.z;
+  };
+  for (std::size_t k = 0; k < m; ++k) {
+    const int index = indices ? (*indices_)[begin + k] : int(begin + k);
+    if (status[k] != 0) {
+      if (status[k] == 1)
+        ++invalid_;
+      else
+        ++out_of_view_;
+      continue;
+    }
+
+    int row = rows[k];
+    if (row < 0) row = rowBySearch(bw[k], bt[k]);
+    const int column = column_code[k] >> 1;
+    const int base = row * columns;
+    const int cell = base + column;
+    if (index_image[cell] < 0) {
+      index_image[cell] = index;
+      cell_of_point[index] = cell;
+      ++placed_;
+      continue;
+    }
+    if (use_free_neighbour_) {
+      // The side the azimuth leans to first: the nearer neighbour centre.
+      const int step = (column_code[k] & 1) ? 1 : -1;
+      bool placed = false;
+      for (const int side : {step, -step}) {
+        int c = column + side;
+        if (full) {
+          if (c < 0) c += columns;
+          if (c >= columns) c -= columns;
+        } else if (c < 0 || c >= columns) {
+          continue;
+        }
+        if (index_image[base + c] < 0) {
+          index_image[base + c] = index;
+          cell_of_point[index] = base + c;
+          ++placed_;
+          placed = true;
+          break;
+        }
+      }
+      if (placed) {
+        ++shifted_;
+        continue;
+      }
+    }
+    // The cell is taken: the nearer return wins, as in a single-return range image.
+    ++displaced_;
+    const int occupant = index_image[cell];
+    if (range2Of(index) < range2Of(occupant)) {
+      cell_of_point[occupant] = -1;
+      index_image[cell] = index;
+      cell_of_point[index] = cell;
+    }
+  }
 }
 
 template <typename PointT>
@@ -151,7 +596,7 @@ void RangeImageOrganizer<PointT>::passThrough(PointCloud& output) {
 
 template <typename PointT>
 void RangeImageOrganizer<PointT>::organize(PointCloud& output) {
-  displaced_ = shifted_ = invalid_ = out_of_view_ = 0;
+  displaced_ = shifted_ = invalid_ = out_of_view_ = placed_ = 0;
   pass_through_ = false;
   index_image_.clear();
   cell_of_point_.clear();
@@ -177,122 +622,54 @@ void RangeImageOrganizer<PointT>::organize(PointCloud& output) {
       deinitCompute();
       throw;
     }
+    lookup_ready_ = false;
   }
   const int rows = model_.rows();
   const int columns = columns_ > 0 ? columns_ : model_.columns();
-  prepareLookup(columns);
+  // The lookups depend on the model and the width only: kept from frame to frame.
+  if (!lookup_ready_ || output_columns_ != columns) prepareLookup(columns);
 
   const std::size_t cells = std::size_t(rows) * std::size_t(columns);
+  // All buffers below are members: same-size frames reuse them without allocating.
   index_image_.assign(cells, -1);
   cell_of_point_.assign(input_->size(), -1);
-  // Squared range of the point in each cell, for the nearer-return-wins rule (a member: reused).
-  std::vector<float>& cell_range = cell_range_;
-  cell_range.assign(cells, std::numeric_limits<float>::infinity());
-  const float max_range2 =
-      max_range_ > 0.f ? max_range_ * max_range_ : std::numeric_limits<float>::infinity();
-  const float min_range2 = min_range_ > 0.f ? min_range_ * min_range_ : 0.f;
-  const float columns_f = float(columns);
+  for (auto* block : {&block_x_, &block_y_, &block_z_, &block_w_, &block_t_})
+    block->resize(detail::kOrganizerBlock);
+  for (auto* block : {&block_status_, &block_table_, &block_column_, &block_row_})
+    block->resize(detail::kOrganizerBlock);
 
-  // The image is written while the points are placed (reading the input in order, scattering into
-  // the image: measured ~5 % faster than gathering from the input afterwards). It goes to a member
-  // cloud reused from call to call and is swapped into `output` only on
-  // success, so `output` is untouched when organize() throws and organize(*input) works too.
   PointT empty;
   empty.x = empty.y = empty.z = std::numeric_limits<float>::quiet_NaN();
-  PointCloud& image = image_;
-  image.points.assign(cells, empty);
+  const std::size_t count = fake_indices_ ? input_->size() : indices_->size();
+  for (std::size_t begin = 0; begin < count; begin += detail::kOrganizerBlock)
+    placeBlock(begin, std::min(count, begin + detail::kOrganizerBlock));
 
-  auto tryPlace = [&](int cell, int index, float range2) -> bool {
-    if (index_image_[cell] < 0) {
-      index_image_[cell] = index;
-      cell_range[cell] = range2;
-      cell_of_point_[index] = cell;
-      image.points[cell] = (*input_)[index];
-      return true;
-    }
-    return false;
-  };
-
-  for (const auto index : *indices_) {
-    const PointT& p = (*input_)[index];
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
-      ++invalid_;
-      continue;
-    }
-    const float rho2 = p.x * p.x + p.y * p.y;
-    const float range2 = rho2 + p.z * p.z;
-    if (range2 > max_range2 || range2 < min_range2 || !(rho2 > 0.f)) {
-      ++out_of_view_;
-      continue;
-    }
-    const float inv_rho = 1.f / std::sqrt(rho2);
-    const int row = rowOf(inv_rho, p.z);
-    if (row < 0) {
-      ++out_of_view_;
-      continue;
-    }
-    float f = (azimuth_max_ - detail::fastAtan2(p.y, p.x)) * columns_per_radian_;
-    if (full_revolution_) {
-      if (f < 0.f) f += columns_f;
-      if (f >= columns_f) f -= columns_f;
-    } else if (f < 0.f || f >= columns_f) {
-      ++out_of_view_;
-      continue;
-    }
-    const int column = std::min(int(f), columns - 1);
-    const int base = row * columns;
-    if (tryPlace(base + column, index, range2)) continue;
-    if (use_free_neighbour_) {
-      // The side the azimuth leans to first: the nearer neighbour centre.
-      const int step = (f - float(column)) >= 0.5f ? 1 : -1;
-      bool placed = false;
-      for (const int side : {step, -step}) {
-        int c = column + side;
-        if (full_revolution_) {
-          if (c < 0) c += columns;
-          if (c >= columns) c -= columns;
-        } else if (c < 0 || c >= columns) {
-          continue;
-        }
-        if (tryPlace(base + c, index, range2)) {
-          placed = true;
-          break;
-        }
-      }
-      if (placed) {
-        ++shifted_;
-        continue;
-      }
-    }
-    // The cell is taken: the nearer return wins, as in a single-return range image.
-    const int cell = base + column;
-    ++displaced_;
-    if (range2 < cell_range[cell]) {
-      cell_of_point_[index_image_[cell]] = -1;
-      index_image_[cell] = index;
-      cell_range[cell] = range2;
-      cell_of_point_[index] = cell;
-      image.points[cell] = p;
-    }
-  }
-
-  const std::size_t placed =
-      cells - std::size_t(std::count(index_image_.begin(), index_image_.end(), -1));
-  if (placed == 0) {
+  if (placed_ == 0) {
     deinitCompute();
-    if (invalid_ == indices_->size())
-      throw InputError("RangeImageOrganizer: the input has no finite point");
+    if (invalid_ == count) throw InputError("RangeImageOrganizer: the input has no finite point");
     throw InputError("RangeImageOrganizer: no input point lies in the field of view of sensor '" +
                      model_.name() + "'");
   }
 
+  // One pass writes every cell once, from the index image (no NaN fill followed by overwrites;
+  // measured faster than writing the points while placing them and blanking the rest).
+  // organize(*input) needs the input intact while writing: it goes through image_.
+  const bool in_place = &output == input_.get();
+  PointCloud& image = in_place ? image_ : output;
+  image.points.resize(cells);
+  {
+    const PointT* in = input_->points.data();
+    PointT* out = image.points.data();
+    const int* index = index_image_.data();
+    for (std::size_t c = 0; c < cells; ++c) out[c] = index[c] >= 0 ? in[index[c]] : empty;
+  }
   image.header = input_->header;
   image.sensor_origin_ = input_->sensor_origin_;
   image.sensor_orientation_ = input_->sensor_orientation_;
   image.width = std::uint32_t(columns);
   image.height = std::uint32_t(rows);
   image.is_dense = false;
-  output.swap(image);
+  if (in_place) output.swap(image);
   deinitCompute();
 }
 
