@@ -281,6 +281,8 @@ bool EgoMotionEstimator<PointT>::registerToMap(Eigen::Isometry3d& pose) {
         for (int dx = -1; dx <= 1; ++dx)
           for (int dy = -1; dy <= 1; ++dy)
             for (int dz = -1; dz <= 1; ++dz) {
+              // Fine phase: the 6 face neighbours suffice (the point is within a voxel).
+              if (fine && std::abs(dx) + std::abs(dy) + std::abs(dz) != 1) continue;
               const MapVoxel* v =
                   plane(detail::VoxelHashIndex::pack(cell.x() + dx, cell.y() + dy, cell.z() + dz));
               if (!v) continue;
