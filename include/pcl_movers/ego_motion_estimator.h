@@ -241,9 +241,9 @@ class EgoMotionEstimator {
     detail::VoxelMoments moments;
     Eigen::Vector3f mean = Eigen::Vector3f::Zero();
     Eigen::Vector3f normal = Eigen::Vector3f::Zero();  ///< plane normal, or line direction
-    bool planar = false;  ///< has a usable plane or line
+    bool planar = false;                               ///< has a usable plane or line
     bool linear = false;  ///< a line (pole, trunk), matched point-to-line
-    bool dirty = true;  ///< moments changed since the plane was fitted
+    bool dirty = true;    ///< moments changed since the plane was fitted
   };
   /** \brief What one keyframe added to the map (world frame), to subtract it again. */
   struct Keyframe {

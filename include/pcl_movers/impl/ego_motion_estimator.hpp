@@ -52,10 +52,10 @@ std::size_t EgoMotionEstimator<PointT>::summarise(const PointCloud& scan) {
     ++finite;
     const float r2 = p.x * p.x + p.y * p.y + p.z * p.z;
     if (r2 < min2 || r2 > max2) continue;
-    const std::int64_t key = detail::VoxelHashIndex::pack(
-        static_cast<std::int64_t>(std::floor(p.x * inv)),
-        static_cast<std::int64_t>(std::floor(p.y * inv)),
-        static_cast<std::int64_t>(std::floor(p.z * inv)));
+    const std::int64_t key =
+        detail::VoxelHashIndex::pack(static_cast<std::int64_t>(std::floor(p.x * inv)),
+                                     static_cast<std::int64_t>(std::floor(p.y * inv)),
+                                     static_cast<std::int64_t>(std::floor(p.z * inv)));
     // Scanners emit points in firing order, so consecutive points mostly share a voxel: the
     // table is consulted only when the voxel changes.
     if (key != last_key) {
@@ -72,7 +72,8 @@ std::size_t EgoMotionEstimator<PointT>::summarise(const PointCloud& scan) {
     // them to a map built the same way has a false optimum at zero motion (measured: on the
     // simulated urban street the first 0.5 m step was estimated as 0.001 m).
     rng = rng * 6364136223846793005ull + 1442695040888963407ull;
-    if ((rng >> 33) % static_cast<std::uint64_t>(m.n) == 0) sv.sample = Eigen::Vector3f(p.x, p.y, p.z);
+    if ((rng >> 33) % static_cast<std::uint64_t>(m.n) == 0)
+      sv.sample = Eigen::Vector3f(p.x, p.y, p.z);
     m.sum += Eigen::Vector3d(x, y, z);
     // Upper triangle only (written out: Eigen's triangular product is a call per point).
     m.outer(0, 0) += x * x;
@@ -83,8 +84,7 @@ std::size_t EgoMotionEstimator<PointT>::summarise(const PointCloud& scan) {
     m.outer(2, 2) += z * z;
   }
   for (auto& v : scan_voxels_) {
-    v.moments.outer.template triangularView<Eigen::StrictlyLower>() =
-        v.moments.outer.transpose();
+    v.moments.outer.template triangularView<Eigen::StrictlyLower>() = v.moments.outer.transpose();
   }
   return finite;
 }
@@ -121,8 +121,7 @@ const typename EgoMotionEstimator<PointT>::MapVoxel* EgoMotionEstimator<PointT>:
         v.normal = nrm;
         v.planar = nrm.allFinite();
         v.linear = false;
-      } else if (ev(2) > 0 && ev(1) < 0.1 * ev(2) &&
-                 std::abs(es.eigenvectors()(2, 2)) > 0.7) {
+      } else if (ev(2) > 0 && ev(1) < 0.1 * ev(2) && std::abs(es.eigenvectors()(2, 2)) > 0.7) {
         // Only steep lines: a voxel crossed by a single scan line (a ring on the ground or on a
         // wall far away) is also "linear", but that line is where the beam happened to hit,
         // fixed to the sensor, and matching it pins the estimate to zero motion (measured on
@@ -235,7 +234,8 @@ bool EgoMotionEstimator<PointT>::registerToMap(Eigen::Isometry3d& pose) {
                       : std::size_t(1);
   };
   const std::size_t fine_stride = strideFor(max_source_points_);
-  const std::size_t coarse_stride = strideFor(max_source_points_ > 0 ? std::max(1, max_source_points_ / 4) : 0);
+  const std::size_t coarse_stride =
+      strideFor(max_source_points_ > 0 ? std::max(1, max_source_points_ / 4) : 0);
   bool ok = false;
   const int iterations = std::max(2, max_iterations_);
   // Two phases. Coarse: wide gate, wide kernel, no trimming — while the guess is off, the large
