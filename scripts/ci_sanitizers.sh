@@ -50,6 +50,7 @@ t0=$(date +%s)
 stamp() { echo "-- $1: $(($(date +%s) - t0)) s since start of the sanitizer job"; }
 
 echo "== configure + build (Clang, ASan+UBSan, libFuzzer instrumentation) in $BUILD"
+mkdir -p "$BUILD"
 # -gline-tables-only: file:line in sanitizer stack traces is all we need; full -g makes every
 # PCL-heavy translation unit and every link markedly slower.
 cmake -S "$ROOT" -B "$BUILD" "${GENERATOR[@]}" -DCMAKE_BUILD_TYPE=RelWithDebInfo "${LAUNCHER[@]}" \
@@ -57,7 +58,7 @@ cmake -S "$ROOT" -B "$BUILD" "${GENERATOR[@]}" -DCMAKE_BUILD_TYPE=RelWithDebInfo
   -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -gline-tables-only" \
   -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O1 -gline-tables-only" \
   -DPCL_MOVERS_SANITIZE=ON -DPCL_MOVERS_BUILD_FUZZERS=ON -DPCL_MOVERS_BUILD_BENCHMARKS=OFF \
-  >"$BUILD.configure.log" 2>&1 || { cat "$BUILD.configure.log" >&2; exit 1; }
+  >"$BUILD/configure.log" 2>&1 || { cat "$BUILD/configure.log" >&2; exit 1; }
 cmake --build "$BUILD" -j"$JOBS"
 stamp "build"
 
