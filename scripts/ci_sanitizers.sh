@@ -1,19 +1,34 @@
 #!/usr/bin/env bash
-# AddressSanitizer + UndefinedBehaviorSanitizer CI job (issue #8, docs/reliability.md):
-#   1. configure BUILD_DIR (default build-asan) RelWithDebInfo at -O1 with -DPCL_MOVERS_SANITIZE=ON,
-#      no benchmarks;
-#   2. build everything and run the whole ctest suite (unit tests + the bad-input matrix) with
-#      leak detection on and any UB report fatal;
-#   3. simulate the sample scenario and run pcl_movers_detect on it — twice, and require
-#      byte-identical tracks.csv (determinism).
+# The CI sanitizer + fuzz job (issue #8, docs/reliability.md). One Clang build serves both:
+#   1. configure BUILD_DIR (default build-san) RelWithDebInfo at -O1 -gline-tables-only with
+#      -DPCL_MOVERS_SANITIZE=ON (ASan+UBSan on everything) and -DPCL_MOVERS_BUILD_FUZZERS=ON
+#      (coverage instrumentation, libFuzzer targets), no benchmarks, no long-run driver;
+#   2. build the library, every tool, every test and both fuzz targets;
+#   3. run the whole ctest suite (viewer tests under xvfb-run) with leak detection on and any UB
+#      report fatal;
+#   4. simulate the sample scenario and run pcl_movers_detect on it twice, requiring
+#      byte-identical tracks.csv (determinism);
+#   5. run each fuzz target for FUZZ_SECONDS (default 60) from its seed corpus
+#      (scripts/ci_fuzz.sh, on the same build).
 # Any sanitizer report aborts the process, so a non-zero exit of this script means a finding.
-# Usage: scripts/ci_sanitizers.sh [BUILD_DIR] [JOBS]
+# Needs clang, libclang-rt-14-dev (ASan/UBSan/libFuzzer runtimes) and llvm (llvm-symbolizer, for
+# readable stack traces): scripts/setup.sh installs them.
+# Usage: scripts/ci_sanitizers.sh [BUILD_DIR] [JOBS] [FUZZ_SECONDS]   (FUZZ_SECONDS=0: no fuzzing)
 set -euo pipefail
 ROOT="$(cd "$(dirname "$0")/.." && pwd)"
-BUILD="${1:-$ROOT/build-asan}"
+BUILD="${1:-$ROOT/build-san}"
 JOBS="${2:-2}"
+FUZZ_SECONDS="${3:-60}"
+CC_BIN="${CC_SAN:-clang}"
+CXX_BIN="${CXX_SAN:-clang++}"
+command -v "$CXX_BIN" >/dev/null || {
+  echo "error: $CXX_BIN not found (apt-get install clang libclang-rt-14-dev)" >&2
+  exit 1
+}
 LAUNCHER=()
 command -v ccache >/dev/null && LAUNCHER=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+GENERATOR=()
+command -v ninja >/dev/null && GENERATOR=(-G Ninja)
 
 # PCL/VTK/Boost are not instrumented; ASan still sees every malloc/free of the process. No LSan
 # suppressions are needed (see docs/reliability.md); if a third-party leak ever shows up, add it
@@ -23,14 +38,38 @@ export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1"
 if [[ -f "$ROOT/scripts/lsan.supp" ]]; then
   export LSAN_OPTIONS="suppressions=$ROOT/scripts/lsan.supp:print_suppressions=0"
 fi
+# Clang's runtime symbolizes stack traces with llvm-symbolizer (Debian: package llvm).
+for s in llvm-symbolizer llvm-symbolizer-14; do
+  if command -v "$s" >/dev/null; then
+    export ASAN_SYMBOLIZER_PATH="$(command -v "$s")"
+    break
+  fi
+done
 
-cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo "${LAUNCHER[@]}" \
-  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g" -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O1 -g" \
-  -DPCL_MOVERS_SANITIZE=ON -DPCL_MOVERS_BUILD_BENCHMARKS=OFF
+t0=$(date +%s)
+stamp() { echo "-- $1: $(($(date +%s) - t0)) s since start of the sanitizer job"; }
+
+echo "== configure + build (Clang, ASan+UBSan, libFuzzer instrumentation) in $BUILD"
+mkdir -p "$BUILD"
+# -gline-tables-only: file:line in sanitizer stack traces is all we need; full -g makes every
+# PCL-heavy translation unit and every link markedly slower.
+cmake -S "$ROOT" -B "$BUILD" "${GENERATOR[@]}" -DCMAKE_BUILD_TYPE=RelWithDebInfo "${LAUNCHER[@]}" \
+  -DCMAKE_C_COMPILER="$CC_BIN" -DCMAKE_CXX_COMPILER="$CXX_BIN" \
+  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -gline-tables-only" \
+  -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O1 -gline-tables-only" \
+  -DPCL_MOVERS_SANITIZE=ON -DPCL_MOVERS_BUILD_FUZZERS=ON -DPCL_MOVERS_BUILD_BENCHMARKS=OFF \
+  >"$BUILD/configure.log" 2>&1 || { cat "$BUILD/configure.log" >&2; exit 1; }
 cmake --build "$BUILD" -j"$JOBS"
+stamp "build"
 
 echo "== ctest under ASan+UBSan"
-(cd "$BUILD" && ctest --output-on-failure -j"$JOBS" --timeout 900)
+CTEST=(ctest --test-dir "$BUILD" --output-on-failure -j"$JOBS" --timeout 900)
+if [ -z "${DISPLAY:-}" ] && command -v xvfb-run >/dev/null; then
+  xvfb-run -a -s "-screen 0 1280x1024x24" "${CTEST[@]}"
+else
+  "${CTEST[@]}"
+fi
+stamp "ctest"
 
 echo "== simulate + detect on data/scenarios/sample.yaml under ASan+UBSan"
 WORK="$(mktemp -d)"
@@ -45,4 +84,10 @@ if ! cmp "$WORK/run1/tracks.csv" "$WORK/run2/tracks.csv"; then
   exit 1
 fi
 echo "tracks.csv: $(($(wc -l <"$WORK/run1/tracks.csv") - 1)) rows, identical in both runs"
-echo "OK: no sanitizer reports, deterministic output"
+stamp "detect"
+
+if [ "$FUZZ_SECONDS" -gt 0 ]; then
+  bash "$ROOT/scripts/ci_fuzz.sh" "$BUILD" "$FUZZ_SECONDS" "$JOBS"
+  stamp "fuzz"
+fi
+echo "OK: no sanitizer reports, deterministic output, no fuzzer finding"

@@ -192,6 +192,14 @@ namespace detail {
 
 namespace {
 
+/** Histogram bin of value x (bin width `width` from `lo`), or -1 outside [0, bins). Checked in
+ * double before the cast: a huge or non-finite coordinate would make the float-to-int conversion
+ * undefined (found by fuzz_pcd_pipeline). x in (-width, 0) truncates to bin 0, as int() did. */
+int binOf(double x, double lo, double width, int bins) {
+  const double b = (x - lo) / width;
+  return (b > -1.0 && b < bins) ? int(b) : -1;
+}
+
 /** Index of the beam line t_k(w) = a_k + h_k·w nearest to (w, t), starting the walk at `row`;
  * the lines are ordered (a descending) and do not cross for w > 0. */
 int nearestBeam(const std::vector<double>& a, const std::vector<double>& h, float w, float t,
@@ -225,7 +233,7 @@ SensorModel estimateBeams(const std::vector<float>& w, const std::vector<float>&
     const double h = offsetOf(j);
     std::fill(raw.begin(), raw.end(), 0.0);
     for (std::size_t i = 0; i < n; i += stride) {
-      const int b = int((t[i] - h * w[i] - kTMin) / kBin);
+      const int b = binOf(t[i] - h * w[i], kTMin, kBin, bins);
       if (b >= 0 && b < bins) raw[b] += 1.0;
     }
     double* row = &accumulator[std::size_t(j) * bins];
@@ -246,7 +254,7 @@ SensorModel estimateBeams(const std::vector<float>& w, const std::vector<float>&
   // every offset.
   std::vector<std::vector<std::size_t>> members(bands);
   for (std::size_t i = 0; i < n; i += stride) {
-    const int b = int((t[i] - kTMin) / kBin);
+    const int b = binOf(t[i], kTMin, kBin, bins);
     if (b >= 0 && b < bins) members[b / kBand].push_back(i);
   }
   std::vector<int> counts(bins, 0);
@@ -257,13 +265,13 @@ SensorModel estimateBeams(const std::vector<float>& w, const std::vector<float>&
       const double h = offsetOf(j);
       double squares = 0.0;
       for (const std::size_t i : members[band]) {
-        const int b = int((t[i] - h * w[i] - kTMin) / kBin);
+        const int b = binOf(t[i] - h * w[i], kTMin, kBin, bins);
         if (b < 0 || b >= bins) continue;
         squares += 2.0 * counts[b] + 1.0;
         ++counts[b];
       }
       for (const std::size_t i : members[band]) {
-        const int b = int((t[i] - h * w[i] - kTMin) / kBin);
+        const int b = binOf(t[i] - h * w[i], kTMin, kBin, bins);
         if (b >= 0 && b < bins) counts[b] = 0;
       }
       if (worst_squares < 0 || squares < worst_squares) worst_squares = squares;

@@ -22,6 +22,7 @@
 #include <pcl_movers/ground_plane_filter.h>
 #include <pcl_movers/io/sequence.h>
 #include <pcl_movers/io/tracks.h>
+#include <pcl_movers/sensor_model.h>
 #include <pcl_movers/sim/lidar_simulator.h>
 #include <pcl_movers/sim/scenario.h>
 
@@ -552,6 +553,24 @@ TEST(BadInputsInProcess, ReadScanOfPcdWithCorruptTypeLine) {
     EXPECT_NE(std::string(e.what()).find("corrupt.pcd"), std::string::npos) << e.what();
   }
   fs::remove_all(tmpl);
+}
+
+// Found by fuzz_pcd_pipeline in the CI sanitizer job: a PCD whose points have huge elevations made
+// the beam estimator's Hough binning cast ~1e28 to int (undefined behaviour, src/sensor_model.cpp).
+// In the sanitizer build UBSan aborts here without the fix; in any build the estimate must either
+// succeed or refuse with InputError.
+TEST(BadInputsInProcess, SensorModelEstimateSurvivesHugeOffsets) {
+  const std::string path = std::string(PCL_MOVERS_SOURCE_DIR) +
+                           "/test/fuzz/corpus_pcd/regression_beam_estimate_huge_offset.pcd";
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  pcl_movers::io::readScan(path, cloud);
+  ASSERT_GE(cloud.size(), 200u) << "the regression input must reach the beam estimator";
+  try {
+    const pcl_movers::SensorModel model = pcl_movers::SensorModel::estimate(cloud);
+    EXPECT_GT(model.rows(), 0);
+  } catch (const pcl_movers::InputError& e) {
+    EXPECT_FALSE(std::string(e.what()).empty());
+  }
 }
 
 TEST_F(BadInputs, Ground) {
