@@ -121,10 +121,12 @@ void GroundPlaneFilter<PointT>::applyFilter(pcl::Indices& indices) {
   for (std::size_t i = 1; i < ring_edges_.size(); ++i)
     edges_ok = edges_ok && ring_edges_[i] > ring_edges_[i - 1];
   if (!edges_ok || num_sectors_ < 1 || !(distance_threshold_ > 0.f) || !(fit_threshold_ > 0.f) ||
-      !(max_tilt_ >= 0.f) || max_samples_ < 3 || max_iterations_ < 1) {
+      !(max_tilt_ >= 0.f) || max_samples_ < 3 || max_iterations_ < 1 ||
+      !(max_local_slope_ >= 0.f) || !(range_noise_ >= 0.f) || !(local_slope_band_ >= 0.f)) {
     PCL_ERROR(
         "[pcl_movers::%s::applyFilter] Invalid parameters (ring edges must start at 0 and "
-        "increase; sectors, thresholds, samples and iterations must be positive).\n",
+        "increase; sectors, thresholds, samples and iterations must be positive; local-slope "
+        "parameters must be >= 0).\n",
         filter_name_.c_str());
     // Nothing was classified: report every point as removed so callers do not mistake an
     // error for "no ground".
@@ -267,7 +269,40 @@ void GroundPlaneFilter<PointT>::applyFilter(pcl::Indices& indices) {
     }
   }
 
-  // Pass 3: classify in input order so the output keeps the input's point order.
+  // Pass 3: height of every point above its cell's plane, then classify in input order so the
+  // output keeps the input's point order.
+  const bool organized = input_->height > 1 && static_cast<std::size_t>(input_->width) *
+                                                       input_->height ==
+                                                   input_->size();
+  const bool slope_check = local_slope_check_ && organized;
+  height_.assign(input_->size(), std::numeric_limits<float>::quiet_NaN());
+  for (std::size_t k = 0; k < n; ++k)
+    if (cell_of[k] >= 0) {
+      const int idx = (*indices_)[k];
+      height_[idx] = cell_planes_[cell_of[k]].height((*input_)[idx].getVector3fMap());
+    }
+  const int width = static_cast<int>(input_->width);
+  const int image_rows = static_cast<int>(input_->height);
+  const float tan_slope = std::tan(std::min(max_local_slope_, 1.5707f));
+  // Steep rise between a ground candidate and its column neighbours (see the class description).
+  auto steep = [&](int idx) {
+    const float h = height_[idx];
+    const int row = idx / width;
+    const Eigen::Vector3f p = (*input_)[idx].getVector3fMap();
+    for (const int dr : {-1, 1}) {
+      const int r = row + dr;
+      if (r < 0 || r >= image_rows) continue;
+      const int j = idx + dr * width;
+      const float hj = height_[j];
+      if (!(std::abs(hj) <= local_slope_band_)) continue;  // NaN, or an object on the ground
+      const float rise = std::abs(hj - h) - range_noise_;
+      if (rise <= 0.f) continue;
+      const Eigen::Vector3f q = (*input_)[j].getVector3fMap();
+      const float dxy = (q - p).template head<2>().norm();
+      if (rise > tan_slope * dxy) return true;
+    }
+    return false;
+  };
   indices.reserve(n);
   for (std::size_t k = 0; k < n; ++k) {
     const int idx = (*indices_)[k];
@@ -275,8 +310,8 @@ void GroundPlaneFilter<PointT>::applyFilter(pcl::Indices& indices) {
       if (extract_removed_indices_) removed_indices_->push_back(idx);
       continue;
     }
-    const bool ground = std::abs(cell_planes_[cell_of[k]].height((*input_)[idx].getVector3fMap())) <
-                        distance_threshold_;
+    const bool ground =
+        std::abs(height_[idx]) < distance_threshold_ && !(slope_check && steep(idx));
     if (ground == negative_)
       indices.push_back(idx);
     else if (extract_removed_indices_)
