@@ -101,8 +101,8 @@ void printHelp(const char* argv0) {
       "  --per-frame        also print ground precision/recall of every frame\n"
       "  -h, --help         this help\n",
       argv0, d.sensor.c_str(), d.distance, d.tilt_deg, d.sensor_height, d.sectors,
-      d.local_slope_deg, d.range_noise, d.slope_band, d.baseline, d.k,
-      d.floor, d.gap, d.min_points, d.min_fraction);
+      d.local_slope_deg, d.range_noise, d.slope_band, d.baseline, d.k, d.floor, d.gap, d.min_points,
+      d.min_fraction);
 }
 
 using pcl_movers::tools::parseNumber;
@@ -308,12 +308,11 @@ std::string pct(double v) {
 
 int run(int argc, char** argv) {
   const std::vector<std::string> with_value = {
-      "--kitti",    "--sequence",      "--frames",     "--sensor",      "--distance",
-      "--tilt-deg", "--sensor-height", "--sectors",    "--baseline",    "--k",
-      "--floor",    "--gap",           "--min-points", "--min-fraction", "--local-slope-deg",
+      "--kitti",       "--sequence",      "--frames",     "--sensor",       "--distance",
+      "--tilt-deg",    "--sensor-height", "--sectors",    "--baseline",     "--k",
+      "--floor",       "--gap",           "--min-points", "--min-fraction", "--local-slope-deg",
       "--range-noise", "--slope-band"};
-  pcl_movers::tools::checkArguments(argc, argv,
-                                    {"-h", "--help", "--no-local-slope", "--per-frame"},
+  pcl_movers::tools::checkArguments(argc, argv, {"-h", "--help", "--no-local-slope", "--per-frame"},
                                     with_value);
   const auto positional = pcl_movers::tools::positionalArguments(argc, argv, with_value);
   if (!positional.empty())
@@ -395,8 +394,8 @@ int run(int argc, char** argv) {
       "vs. a height threshold z < %g m. Objects: ground removed, RangeImageRegionGrowing (k = %g, "
       "floor %g m, gap %d); instances with >= %d points, recovered = one cluster holds >= %g %% "
       "of them.\n\n",
-      opt.distance, opt.tilt_deg, opt.sectors, slope_text, -opt.sensor_height + opt.baseline,
-      opt.k, opt.floor, opt.gap, opt.min_points, 100.0 * opt.min_fraction);
+      opt.distance, opt.tilt_deg, opt.sectors, slope_text, -opt.sensor_height + opt.baseline, opt.k,
+      opt.floor, opt.gap, opt.min_points, 100.0 * opt.min_fraction);
   std::printf(
       "| data | frames | ground precision | ground recall | baseline precision | baseline recall "
       "|\n|---|---|---|---|---|---|\n");

@@ -183,7 +183,7 @@ class GroundPlaneFilter : public pcl::FilterIndices<PointT> {
    * fails or is too steep or too far from `prior` (more than `band` at `centre`). */
   bool fitPlane(const pcl::Indices& candidates, const Plane& prior, float band,
                 const Eigen::Vector2f& centre, SacModelPtr& model,
-                pcl::RandomSampleConsensus<PointT>& ransac, Plane& fitted) const;
+                pcl::RandomSampleConsensus<PointT>& ransac, Plane& fitted);
 
   /** \brief Ring of a horizontal distance r (binary search over ring_edges_). */
   int ringOf(float r) const;
@@ -211,6 +211,9 @@ class GroundPlaneFilter : public pcl::FilterIndices<PointT> {
   std::vector<int> cell_of_, cell_start_, cell_points_, ring_lut_;
   std::vector<Eigen::Vector3f> cell_xyz_;
   std::vector<float> height_;  ///< per point of the input: height above its plane, NaN if unused
+  std::vector<std::uint8_t> steep_;  ///< per point: the local-slope test flagged it
+  pcl::IndicesPtr sample_;           ///< RANSAC subsample of the current cell
+  pcl::Indices inliers_;             ///< inliers of the current cell's plane
 };
 
 }  // namespace pcl_movers

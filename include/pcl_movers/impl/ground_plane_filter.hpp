@@ -57,20 +57,51 @@ bool GroundPlaneFilter<PointT>::fitPlane(const pcl::Indices& candidates, const P
                                          float band, const Eigen::Vector2f& centre,
                                          SacModelPtr& model,
                                          pcl::RandomSampleConsensus<PointT>& ransac,
-                                         Plane& fitted) const {
+                                         Plane& fitted) {
   // RANSAC on an evenly strided subsample: the inlier ratio is high, so a few dozen points and
   // iterations find the plane; the refit below uses every inlier of the subsample.
   const std::size_t stride =
       (candidates.size() + static_cast<std::size_t>(max_samples_) - 1) / max_samples_;
-  pcl::IndicesPtr sample(new pcl::Indices);
-  for (std::size_t j = 0; j < candidates.size(); j += stride) sample->push_back(candidates[j]);
-  model->setIndices(sample);
-  if (!ransac.computeModel()) return false;
-  pcl::Indices inliers;
-  ransac.getInliers(inliers);
+  if (!sample_) sample_.reset(new pcl::Indices);
+  sample_->clear();
+  for (std::size_t j = 0; j < candidates.size(); j += stride) sample_->push_back(candidates[j]);
+  model->setIndices(sample_);
+  // The inner neighbour's plane is the first hypothesis: when it already explains most of the
+  // sample, random hypotheses could not do much better (with an inlier ratio w >= 0.8, RANSAC's
+  // own stopping rule ends after a handful of samples anyway), so only the least-squares refit
+  // below is run. This skips RANSAC in most cells of flat or gently bending ground.
+  Eigen::VectorXf coefficients(4);
+  inliers_.clear();
+  for (const auto i : *sample_)
+    if (std::abs(prior.height((*input_)[i].getVector3fMap())) < fit_threshold_)
+      inliers_.push_back(i);
+  if (5 * inliers_.size() >= 4 * sample_->size()) {
+    // One local-optimization step (as in LO-RANSAC): refit on the prior's inliers, then take the
+    // inliers of that refit, so a prior that is slightly off does not bias the final plane.
+    coefficients << prior.normal, prior.d;
+    if (inliers_.size() > 3) {
+      Eigen::VectorXf local;
+      model->optimizeModelCoefficients(inliers_, coefficients, local);
+      const float norm = local.head<3>().norm();
+      if (norm > 0.f && std::isfinite(local[3])) {
+        Plane p;
+        p.normal = local.head<3>() / norm;
+        p.d = local[3] / norm;
+        inliers_.clear();
+        for (const auto i : *sample_)
+          if (std::abs(p.height((*input_)[i].getVector3fMap())) < fit_threshold_)
+            inliers_.push_back(i);
+        coefficients = local;
+      }
+    }
+  } else {
+    if (!ransac.computeModel()) return false;
+    ransac.getInliers(inliers_);
+    ransac.getModelCoefficients(coefficients);
+  }
+  const pcl::Indices& inliers = inliers_;
   if (inliers.size() < 6) return false;  // too few to refit (PCL needs more than 3)
-  Eigen::VectorXf coefficients, refined;
-  ransac.getModelCoefficients(coefficients);
+  Eigen::VectorXf refined;
   model->optimizeModelCoefficients(inliers, coefficients, refined);
   Eigen::Vector3f normal = refined.head<3>();
   const float norm = normal.norm();
@@ -271,19 +302,20 @@ void GroundPlaneFilter<PointT>::applyFilter(pcl::Indices& indices) {
 
   // Pass 3: height of every point above its cell's plane, then classify in input order so the
   // output keeps the input's point order.
-  const bool organized = input_->height > 1 && static_cast<std::size_t>(input_->width) *
-                                                       input_->height ==
-                                                   input_->size();
+  const bool organized = input_->height > 1 &&
+                         static_cast<std::size_t>(input_->width) * input_->height == input_->size();
   const bool slope_check = local_slope_check_ && organized;
+  // In cell order: one plane per run of points and the coordinates read sequentially.
   height_.assign(input_->size(), std::numeric_limits<float>::quiet_NaN());
-  for (std::size_t k = 0; k < n; ++k)
-    if (cell_of[k] >= 0) {
-      const int idx = (*indices_)[k];
-      height_[idx] = cell_planes_[cell_of[k]].height((*input_)[idx].getVector3fMap());
-    }
+  for (int c = 0; c < num_cells; ++c) {
+    const Plane& plane = cell_planes_[c];
+    for (int j = cell_start[c]; j < cell_start[c + 1]; ++j)
+      height_[cell_points[j]] = plane.height(cell_xyz_[j]);
+  }
   const int width = static_cast<int>(input_->width);
   const int image_rows = static_cast<int>(input_->height);
   const float tan_slope = std::tan(std::min(max_local_slope_, 1.5707f));
+  const float tan2_slope = tan_slope * tan_slope;
   // Steep rise between a ground candidate and its column neighbours (see the class description).
   auto steep = [&](int idx) {
     const float h = height_[idx];
@@ -298,10 +330,27 @@ void GroundPlaneFilter<PointT>::applyFilter(pcl::Indices& indices) {
       const float rise = std::abs(hj - h) - range_noise_;
       if (rise <= 0.f) continue;
       const Eigen::Vector3f q = (*input_)[j].getVector3fMap();
-      const float dxy = (q - p).template head<2>().norm();
-      if (rise > tan_slope * dxy) return true;
+      // rise > tan(slope) * horizontal distance, squared (both sides >= 0): no square root.
+      if (rise * rise > tan2_slope * (q - p).template head<2>().squaredNorm()) return true;
     }
     return false;
+  };
+  // Steep flags of the ground candidates; a flag counts only when a row neighbour (same beam,
+  // next azimuth) is flagged too: vegetation and wall bases are rough over several columns, while
+  // range noise on the road flags isolated points.
+  if (slope_check) {
+    steep_.assign(input_->size(), 0);
+    for (std::size_t k = 0; k < n; ++k) {
+      const int idx = (*indices_)[k];
+      if (cell_of[k] >= 0 && std::abs(height_[idx]) < distance_threshold_) steep_[idx] = steep(idx);
+    }
+  }
+  auto rejected = [&](int idx) {
+    if (!steep_[idx]) return false;
+    const int col = idx % width;
+    const int left = col > 0 ? idx - 1 : idx + width - 1;
+    const int right = col + 1 < width ? idx + 1 : idx - width + 1;
+    return steep_[left] || steep_[right];
   };
   indices.reserve(n);
   for (std::size_t k = 0; k < n; ++k) {
@@ -311,7 +360,7 @@ void GroundPlaneFilter<PointT>::applyFilter(pcl::Indices& indices) {
       continue;
     }
     const bool ground =
-        std::abs(height_[idx]) < distance_threshold_ && !(slope_check && steep(idx));
+        std::abs(height_[idx]) < distance_threshold_ && !(slope_check && rejected(idx));
     if (ground == negative_)
       indices.push_back(idx);
     else if (extract_removed_indices_)
