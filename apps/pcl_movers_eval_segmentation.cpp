@@ -15,6 +15,7 @@
 #include <pcl/console/print.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -170,6 +171,8 @@ struct Result {
   std::vector<pcl_movers::eval::GroundScore> ground_per_frame;
   pcl_movers::eval::ObjectScore objects;
   std::map<std::uint16_t, std::size_t> false_ground;  ///< true class of points called ground
+  /// Per instance class: scored, recovered, over-segmented, under-segmented (merged).
+  std::map<std::uint16_t, std::array<std::size_t, 4>> by_class;
   double ground_ms = 0, organize_ms = 0, segment_ms = 0;
 };
 
@@ -285,8 +288,19 @@ void scoreFrame(const Frame& frame, const Options& opt, Result& result) {
       ++result.instance_points;
       result.unplaced_instance_points += !placed[i];
     }
+  std::vector<pcl_movers::eval::InstanceOutcome> outcomes;
   result.objects += pcl_movers::eval::scoreObjects(instance_of, cluster_of, opt.min_points,
-                                                   opt.min_fraction, &placed);
+                                                   opt.min_fraction, &placed, &outcomes);
+  std::map<int, std::uint16_t> class_of;  // instance -> its class (all its points share one)
+  for (std::size_t i = 0; i < n; ++i)
+    if (instance_of[i] > 0) class_of[instance_of[i]] = pcl_movers::io::labelClass(labels[i]);
+  for (const auto& o : outcomes) {
+    auto& row = result.by_class[class_of[o.instance]];
+    ++row[0];
+    row[1] += o.recovered;
+    row[2] += o.over_segmented;
+    row[3] += o.under_segmented;
+  }
 }
 
 std::string className(std::uint16_t c) {
@@ -438,6 +452,17 @@ int run(int argc, char** argv) {
                 pct(o.rate(o.missed)).c_str(),
                 pct(r.instance_points ? double(r.unplaced_instance_points) / r.instance_points : 0)
                     .c_str());
+  }
+  std::printf("\nObject outcomes by class (scored / recovered / over-segmented / merged):\n\n");
+  for (const auto& r : results) {
+    std::printf("- %s:", r.name.c_str());
+    bool first = true;
+    for (const auto& [cls, row] : r.by_class) {
+      std::printf("%s %s %zu/%zu/%zu/%zu", first ? "" : ",", className(cls).c_str(), row[0], row[1],
+                  row[2], row[3]);
+      first = false;
+    }
+    std::printf("\n");
   }
   std::printf(
       "\n| data | points/frame | ground ms/frame | organize ms/frame | segment ms/frame |\n"
