@@ -66,39 +66,10 @@ bool GroundPlaneFilter<PointT>::fitPlane(const pcl::Indices& candidates, const P
   sample_->clear();
   for (std::size_t j = 0; j < candidates.size(); j += stride) sample_->push_back(candidates[j]);
   model->setIndices(sample_);
-  // The inner neighbour's plane is the first hypothesis: when it already explains most of the
-  // sample, random hypotheses could not do much better (with an inlier ratio w >= 0.8, RANSAC's
-  // own stopping rule ends after a handful of samples anyway), so only the least-squares refit
-  // below is run. This skips RANSAC in most cells of flat or gently bending ground.
-  Eigen::VectorXf coefficients(4);
-  inliers_.clear();
-  for (const auto i : *sample_)
-    if (std::abs(prior.height((*input_)[i].getVector3fMap())) < fit_threshold_)
-      inliers_.push_back(i);
-  if (5 * inliers_.size() >= 4 * sample_->size()) {
-    // One local-optimization step (as in LO-RANSAC): refit on the prior's inliers, then take the
-    // inliers of that refit, so a prior that is slightly off does not bias the final plane.
-    coefficients << prior.normal, prior.d;
-    if (inliers_.size() > 3) {
-      Eigen::VectorXf local;
-      model->optimizeModelCoefficients(inliers_, coefficients, local);
-      const float norm = local.head<3>().norm();
-      if (norm > 0.f && std::isfinite(local[3])) {
-        Plane p;
-        p.normal = local.head<3>() / norm;
-        p.d = local[3] / norm;
-        inliers_.clear();
-        for (const auto i : *sample_)
-          if (std::abs(p.height((*input_)[i].getVector3fMap())) < fit_threshold_)
-            inliers_.push_back(i);
-        coefficients = local;
-      }
-    }
-  } else {
-    if (!ransac.computeModel()) return false;
-    ransac.getInliers(inliers_);
-    ransac.getModelCoefficients(coefficients);
-  }
+  if (!ransac.computeModel()) return false;
+  ransac.getInliers(inliers_);
+  Eigen::VectorXf coefficients;
+  ransac.getModelCoefficients(coefficients);
   const pcl::Indices& inliers = inliers_;
   if (inliers.size() < 6) return false;  // too few to refit (PCL needs more than 3)
   Eigen::VectorXf refined;
