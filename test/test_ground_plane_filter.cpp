@@ -435,6 +435,36 @@ TEST(GroundPlaneFilter, Deterministic) {
   EXPECT_EQ(groundOf(scene.cloud), groundOf(scene.cloud));
 }
 
+TEST(GroundPlaneFilter, ReusedFilterMatchesAFreshOne) {
+  // The filter keeps work buffers between calls and its RANSAC must restart from the same seed
+  // every call: one instance run over frames of different sizes and layouts must give exactly
+  // what a fresh instance gives on each frame.
+  auto rolling = [](float x, float y) {
+    return -kSensorHeight + 0.5f * std::sin(x / 10.f + y / 13.f);
+  };
+  Scene unorganized = makeGround(rolling, 11);
+  addBox(unorganized, rolling, 10.f, 0.f, 4.f, 2.f, 1.5f);
+  addBox(unorganized, rolling, -6.f, 8.f, 2.f, 2.f, 1.0f);
+  const auto kerb = [](float, float y) { return -kSensorHeight + (y > 4.f ? 0.12f : 0.f); };
+  const auto car = [](float x, float y) {
+    return std::abs(x - 12.f) < 2.f && std::abs(y + 3.f) < 1.f ? 1.4f : 0.f;
+  };
+  const Scene organized = castOrganized(kerb, car);
+  ASSERT_GT(organized.cloud->height, 1u);
+  const std::vector<Cloud::Ptr> frames{unorganized.cloud, organized.cloud, unorganized.cloud,
+                                       organized.cloud};
+  GroundPlaneFilter<pcl::PointXYZ> reused;
+  reused.setNegative(true);
+  for (std::size_t f = 0; f < frames.size(); ++f) {
+    pcl::Indices ground;
+    reused.setInputCloud(frames[f]);
+    reused.filter(ground);
+    const pcl::Indices fresh = groundOf(frames[f]);
+    EXPECT_GT(fresh.size(), frames[f]->size() / 2) << "frame " << f;
+    EXPECT_EQ(ground, fresh) << "frame " << f;
+  }
+}
+
 TEST(GroundPlaneFilter, EmptyAndNanOnlyInputs) {
   GroundPlaneFilter<pcl::PointXYZ> filter(true);
   Cloud::Ptr empty(new Cloud);

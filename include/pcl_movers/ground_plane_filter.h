@@ -208,7 +208,7 @@ class GroundPlaneFilter : public pcl::FilterIndices<PointT> {
   std::vector<Plane> cell_planes_;
   std::vector<std::uint8_t> cell_fitted_;
   // Work buffers kept between calls so a sequence of frames does not reallocate.
-  std::vector<int> cell_of_, cell_start_, cell_points_, ring_lut_;
+  std::vector<int> cell_of_, cell_start_, cell_fill_, cell_points_, ring_lut_;
   std::vector<Eigen::Vector3f> cell_xyz_;
   std::vector<float> height_;  ///< per point of the input: height above its plane, NaN if unused
   std::vector<std::uint8_t> steep_;  ///< per point: the local-slope test flagged it

@@ -188,7 +188,8 @@ void GroundPlaneFilter<PointT>::applyFilter(pcl::Indices& indices) {
   // sequentially instead of jumping around the cloud (that was the filter's main cost).
   cell_xyz_.resize(cell_points.size());
   {
-    std::vector<int> fill(cell_start.begin(), cell_start.end() - 1);
+    std::vector<int>& fill = cell_fill_;
+    fill.assign(cell_start.begin(), cell_start.end() - 1);
     for (std::size_t k = 0; k < n; ++k)
       if (cell_of[k] >= 0) {
         const int j = fill[cell_of[k]]++;
@@ -209,7 +210,10 @@ void GroundPlaneFilter<PointT>::applyFilter(pcl::Indices& indices) {
            0.5f * (ring_edges_[ring] - (ring > 0 ? ring_edges_[ring - 1] : 0.f));
   };
 
-  SacModelPtr model(new SacModel(input_, /*random=*/false));
+  // Built on an empty index list: the cloud constructor would fill (and copy) an index per point
+  // of the frame, only for fitPlane to replace them with the cell's subsample. A fresh model per
+  // call keeps the fixed seed, so every frame's RANSAC draws are reproducible.
+  SacModelPtr model(new SacModel(input_, pcl::Indices(), /*random=*/false));
   model->setAxis(Eigen::Vector3f::UnitZ());
   model->setEpsAngle(max_tilt_);
   pcl::RandomSampleConsensus<PointT> ransac(model, fit_threshold_);
@@ -284,18 +288,18 @@ void GroundPlaneFilter<PointT>::applyFilter(pcl::Indices& indices) {
       height_[cell_points[j]] = plane.height(cell_xyz_[j]);
   }
   const int width = static_cast<int>(input_->width);
-  const int image_rows = static_cast<int>(input_->height);
+  const int image_size = static_cast<int>(input_->size());
   const float tan_slope = std::tan(std::min(max_local_slope_, 1.5707f));
   const float tan2_slope = tan_slope * tan_slope;
   // Steep rise between a ground candidate and its column neighbours (see the class description).
   auto steep = [&](int idx) {
     const float h = height_[idx];
-    const int row = idx / width;
     const Eigen::Vector3f p = (*input_)[idx].getVector3fMap();
     for (const int dr : {-1, 1}) {
-      const int r = row + dr;
-      if (r < 0 || r >= image_rows) continue;
+      // The row above / below exists iff its index stays inside the image (width * rows
+      // points): no integer division per candidate to find the row.
       const int j = idx + dr * width;
+      if (j < 0 || j >= image_size) continue;
       const float hj = height_[j];
       if (!(std::abs(hj) <= local_slope_band_)) continue;  // NaN, or an object on the ground
       const float rise = std::abs(hj - h) - range_noise_;
