@@ -15,6 +15,7 @@
 #include <pcl/console/print.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -38,6 +39,12 @@ struct Options {
   float tilt_deg = pcl_movers::GroundPlaneFilter<Point>().getMaxTilt() * 180.f / float(M_PI);
   float sensor_height = pcl_movers::GroundPlaneFilter<Point>().getSensorHeight();
   int sectors = pcl_movers::GroundPlaneFilter<Point>().getNumSectors();
+  bool local_slope = pcl_movers::GroundPlaneFilter<Point>().getLocalSlopeCheck();
+  float local_slope_deg =
+      pcl_movers::GroundPlaneFilter<Point>().getMaxLocalSlope() * 180.f / float(M_PI);
+  float range_noise = pcl_movers::GroundPlaneFilter<Point>().getRangeNoise();
+  float slope_band = pcl_movers::GroundPlaneFilter<Point>().getLocalSlopeBand();
+  bool per_frame = false;
   float baseline = 0.25f;
   // segmentation
   float k = pcl_movers::RangeImageRegionGrowing<Point>().getDepthThresholdFactor();
@@ -77,6 +84,11 @@ void printHelp(const char* argv0) {
       "  --tilt-deg D       steepest ground plane (default %g)\n"
       "  --sensor-height M  sensor height above the ground (default %g)\n"
       "  --sectors N        azimuth sectors (default %d)\n"
+      "  --local-slope-deg D  steepest rise to a column neighbour still ground (default %g)\n"
+      "  --range-noise M    height noise forgiven by the local-slope test (default %g)\n"
+      "  --slope-band M     column neighbours further than M from their plane are ignored by\n"
+      "                     the local-slope test (default %g)\n"
+      "  --no-local-slope   plane distance only (the local-slope test off)\n"
       "  --baseline M       the height-threshold baseline calls z < -sensor_height + M ground\n"
       "                     (default %g)\n\n"
       "Segmentation:\n"
@@ -87,9 +99,11 @@ void printHelp(const char* argv0) {
       "Scoring:\n"
       "  --min-points N     smallest scored instance (default %d)\n"
       "  --min-fraction F   share of an instance one cluster must hold (default %g)\n"
+      "  --per-frame        also print ground precision/recall of every frame\n"
       "  -h, --help         this help\n",
-      argv0, d.sensor.c_str(), d.distance, d.tilt_deg, d.sensor_height, d.sectors, d.baseline, d.k,
-      d.floor, d.gap, d.min_points, d.min_fraction);
+      argv0, d.sensor.c_str(), d.distance, d.tilt_deg, d.sensor_height, d.sectors,
+      d.local_slope_deg, d.range_noise, d.slope_band, d.baseline, d.k, d.floor, d.gap, d.min_points,
+      d.min_fraction);
 }
 
 using pcl_movers::tools::parseNumber;
@@ -154,8 +168,11 @@ struct Result {
   std::string name;
   std::size_t frames = 0, points = 0, unplaced_instance_points = 0, instance_points = 0;
   pcl_movers::eval::GroundScore ground, baseline;
+  std::vector<pcl_movers::eval::GroundScore> ground_per_frame;
   pcl_movers::eval::ObjectScore objects;
   std::map<std::uint16_t, std::size_t> false_ground;  ///< true class of points called ground
+  /// Per instance class: scored, recovered, over-segmented, under-segmented (merged).
+  std::map<std::uint16_t, std::array<std::size_t, 4>> by_class;
   double ground_ms = 0, organize_ms = 0, segment_ms = 0;
 };
 
@@ -175,35 +192,13 @@ void scoreFrame(const Frame& frame, const Options& opt, Result& result) {
   ++result.frames;
   result.points += n;
 
-  // Ground on the scan as it is (organized or not): the filter needs no range image.
-  pcl_movers::GroundPlaneFilter<Point> ground_filter;
-  ground_filter.setDistanceThreshold(opt.distance);
-  ground_filter.setMaxTilt(opt.tilt_deg * float(M_PI) / 180.f);
-  ground_filter.setSensorHeight(opt.sensor_height);
-  ground_filter.setNumSectors(opt.sectors);
-  ground_filter.setInputCloud(cloud);
-  ground_filter.setNegative(true);
-  pcl::Indices ground;
-  auto t0 = std::chrono::steady_clock::now();
-  ground_filter.filter(ground);
-  result.ground_ms += msSince(t0);
-  std::vector<std::uint8_t> is_ground(n, 0), is_baseline(n, 0);
-  for (const auto i : ground) is_ground[i] = 1;
-  const float z0 = cloud->sensor_origin_.z() - opt.sensor_height + opt.baseline;
-  for (std::size_t i = 0; i < n; ++i) is_baseline[i] = (*cloud)[i].z < z0;
-  const auto truth = pcl_movers::eval::groundTruthFromLabels(labels);
-  result.ground += pcl_movers::eval::scoreGround(truth, is_ground);
-  for (std::size_t i = 0; i < n; ++i)
-    if (is_ground[i] && truth[i] == pcl_movers::eval::GroundTruth::kObject)
-      ++result.false_ground[pcl_movers::io::labelClass(labels[i])];
-  result.baseline += pcl_movers::eval::scoreGround(truth, is_baseline);
-
-  // Objects: organize (pass-through for organized scans), blank the ground, grow regions.
+  // Organize first (pass-through for organized scans): the pipeline (MoverDetector) runs the
+  // ground filter on the range image, where its local-slope test has beam neighbours.
   pcl_movers::RangeImageOrganizer<Point> organizer;
   organizer.setSensorModel(pcl_movers::SensorModel::fromName(opt.sensor));
   organizer.setInputCloud(cloud);
   Cloud::Ptr image(new Cloud);
-  t0 = std::chrono::steady_clock::now();
+  auto t0 = std::chrono::steady_clock::now();
   organizer.organize(*image);
   result.organize_ms += msSince(t0);
   std::vector<int> index_image = organizer.getIndexImage();
@@ -211,6 +206,58 @@ void scoreFrame(const Frame& frame, const Options& opt, Result& result) {
     index_image.resize(image->size());
     for (std::size_t i = 0; i < index_image.size(); ++i) index_image[i] = static_cast<int>(i);
   }
+  std::vector<std::uint8_t> placed(n, 0);
+  std::size_t unplaced = 0;
+  for (std::size_t c = 0; c < index_image.size(); ++c)
+    if (index_image[c] >= 0) placed[index_image[c]] = 1;
+  for (std::size_t i = 0; i < n; ++i) unplaced += !placed[i];
+
+  auto configure = [&opt](pcl_movers::GroundPlaneFilter<Point>& f) {
+    f.setDistanceThreshold(opt.distance);
+    f.setMaxTilt(opt.tilt_deg * float(M_PI) / 180.f);
+    f.setSensorHeight(opt.sensor_height);
+    f.setNumSectors(opt.sectors);
+    f.setLocalSlopeCheck(opt.local_slope);
+    f.setMaxLocalSlope(opt.local_slope_deg * float(M_PI) / 180.f);
+    f.setRangeNoise(opt.range_noise);
+    f.setLocalSlopeBand(opt.slope_band);
+    f.setNegative(true);
+  };
+  std::vector<std::uint8_t> is_ground(n, 0), is_baseline(n, 0);
+  {
+    pcl_movers::GroundPlaneFilter<Point> ground_filter;
+    configure(ground_filter);
+    ground_filter.setInputCloud(image);
+    pcl::Indices ground;
+    t0 = std::chrono::steady_clock::now();
+    ground_filter.filter(ground);
+    result.ground_ms += msSince(t0);
+    for (const auto c : ground)
+      if (index_image[c] >= 0) is_ground[index_image[c]] = 1;
+  }
+  if (unplaced > 0) {
+    // Points the range image could not hold (a nearer return took their cell) are still scored:
+    // they get the plane test alone, from the same filter run on the raw scan (not timed).
+    pcl_movers::GroundPlaneFilter<Point> raw_filter;
+    configure(raw_filter);
+    raw_filter.setInputCloud(cloud);
+    pcl::Indices ground;
+    raw_filter.filter(ground);
+    for (const auto i : ground)
+      if (!placed[i]) is_ground[i] = 1;
+  }
+  const float z0 = cloud->sensor_origin_.z() - opt.sensor_height + opt.baseline;
+  for (std::size_t i = 0; i < n; ++i) is_baseline[i] = (*cloud)[i].z < z0;
+  const auto truth = pcl_movers::eval::groundTruthFromLabels(labels);
+  const auto frame_score = pcl_movers::eval::scoreGround(truth, is_ground);
+  result.ground += frame_score;
+  result.ground_per_frame.push_back(frame_score);
+  for (std::size_t i = 0; i < n; ++i)
+    if (is_ground[i] && truth[i] == pcl_movers::eval::GroundTruth::kObject)
+      ++result.false_ground[pcl_movers::io::labelClass(labels[i])];
+  result.baseline += pcl_movers::eval::scoreGround(truth, is_baseline);
+
+  // Objects: blank the ground in the range image, grow regions.
   const float nan = std::numeric_limits<float>::quiet_NaN();
   for (std::size_t c = 0; c < image->size(); ++c)
     if (index_image[c] >= 0 && is_ground[index_image[c]]) {
@@ -229,9 +276,6 @@ void scoreFrame(const Frame& frame, const Options& opt, Result& result) {
   result.segment_ms += msSince(t0);
 
   std::vector<int> cluster_of(n, -1);
-  std::vector<std::uint8_t> placed(n, 0);
-  for (std::size_t c = 0; c < index_image.size(); ++c)
-    if (index_image[c] >= 0) placed[index_image[c]] = 1;
   for (std::size_t k = 0; k < clusters.size(); ++k)
     for (const auto c : clusters[k].indices)
       if (index_image[c] >= 0) cluster_of[index_image[c]] = static_cast<int>(k);
@@ -244,8 +288,19 @@ void scoreFrame(const Frame& frame, const Options& opt, Result& result) {
       ++result.instance_points;
       result.unplaced_instance_points += !placed[i];
     }
+  std::vector<pcl_movers::eval::InstanceOutcome> outcomes;
   result.objects += pcl_movers::eval::scoreObjects(instance_of, cluster_of, opt.min_points,
-                                                   opt.min_fraction, &placed);
+                                                   opt.min_fraction, &placed, &outcomes);
+  std::map<int, std::uint16_t> class_of;  // instance -> its class (all its points share one)
+  for (std::size_t i = 0; i < n; ++i)
+    if (instance_of[i] > 0) class_of[instance_of[i]] = pcl_movers::io::labelClass(labels[i]);
+  for (const auto& o : outcomes) {
+    auto& row = result.by_class[class_of[o.instance]];
+    ++row[0];
+    row[1] += o.recovered;
+    row[2] += o.over_segmented;
+    row[3] += o.under_segmented;
+  }
 }
 
 std::string className(std::uint16_t c) {
@@ -267,10 +322,12 @@ std::string pct(double v) {
 
 int run(int argc, char** argv) {
   const std::vector<std::string> with_value = {
-      "--kitti",    "--sequence",      "--frames",     "--sensor",      "--distance",
-      "--tilt-deg", "--sensor-height", "--sectors",    "--baseline",    "--k",
-      "--floor",    "--gap",           "--min-points", "--min-fraction"};
-  pcl_movers::tools::checkArguments(argc, argv, {"-h", "--help"}, with_value);
+      "--kitti",       "--sequence",      "--frames",     "--sensor",       "--distance",
+      "--tilt-deg",    "--sensor-height", "--sectors",    "--baseline",     "--k",
+      "--floor",       "--gap",           "--min-points", "--min-fraction", "--local-slope-deg",
+      "--range-noise", "--slope-band"};
+  pcl_movers::tools::checkArguments(argc, argv, {"-h", "--help", "--no-local-slope", "--per-frame"},
+                                    with_value);
   const auto positional = pcl_movers::tools::positionalArguments(argc, argv, with_value);
   if (!positional.empty())
     throw InputError("unexpected argument '" + positional.front() +
@@ -287,6 +344,16 @@ int run(int argc, char** argv) {
     opt.sensor_height = nonNegative("--sensor-height", v);
   if (pcl::console::parse_argument(argc, argv, "--sectors", v) >= 0)
     opt.sectors = integer("--sectors", v, 1);
+  if (pcl::console::parse_argument(argc, argv, "--local-slope-deg", v) >= 0) {
+    opt.local_slope_deg = nonNegative("--local-slope-deg", v);
+    if (opt.local_slope_deg >= 90) throw InputError("--local-slope-deg: must be below 90");
+  }
+  if (pcl::console::parse_argument(argc, argv, "--range-noise", v) >= 0)
+    opt.range_noise = nonNegative("--range-noise", v);
+  if (pcl::console::parse_argument(argc, argv, "--slope-band", v) >= 0)
+    opt.slope_band = nonNegative("--slope-band", v);
+  if (pcl::console::find_switch(argc, argv, "--no-local-slope")) opt.local_slope = false;
+  if (pcl::console::find_switch(argc, argv, "--per-frame")) opt.per_frame = true;
   if (pcl::console::parse_argument(argc, argv, "--baseline", v) >= 0)
     opt.baseline = parseNumber("--baseline", v);
   if (pcl::console::parse_argument(argc, argv, "--k", v) >= 0) opt.k = nonNegative("--k", v);
@@ -331,12 +398,18 @@ int run(int argc, char** argv) {
   for (const auto& dir : opt.kitti) evaluate(dir, kittiFrames(dir, opt.first, opt.last));
   for (const auto& dir : opt.sequences) evaluate(dir, sequenceFrames(dir, opt.first, opt.last));
 
+  char slope_text[128] = "local-slope test off";
+  if (opt.local_slope)
+    std::snprintf(slope_text, sizeof(slope_text),
+                  "local slope <= %.0f° with %g m noise, neighbour band %g m", opt.local_slope_deg,
+                  opt.range_noise, opt.slope_band);
   std::printf(
-      "Ground: GroundPlaneFilter (distance %g m, tilt %.1f°, %d sectors) vs. a height threshold "
-      "z < %g m. Objects: ground removed, RangeImageRegionGrowing (k = %g, floor %g m, gap %d); "
-      "instances with >= %d points, recovered = one cluster holds >= %g %% of them.\n\n",
-      opt.distance, opt.tilt_deg, opt.sectors, -opt.sensor_height + opt.baseline, opt.k, opt.floor,
-      opt.gap, opt.min_points, 100.0 * opt.min_fraction);
+      "Ground: GroundPlaneFilter on the range image (distance %g m, tilt %.1f°, %d sectors, %s) "
+      "vs. a height threshold z < %g m. Objects: ground removed, RangeImageRegionGrowing (k = %g, "
+      "floor %g m, gap %d); instances with >= %d points, recovered = one cluster holds >= %g %% "
+      "of them.\n\n",
+      opt.distance, opt.tilt_deg, opt.sectors, slope_text, -opt.sensor_height + opt.baseline, opt.k,
+      opt.floor, opt.gap, opt.min_points, 100.0 * opt.min_fraction);
   std::printf(
       "| data | frames | ground precision | ground recall | baseline precision | baseline recall "
       "|\n|---|---|---|---|---|---|\n");
@@ -344,6 +417,14 @@ int run(int argc, char** argv) {
     std::printf("| %s | %zu | %s | %s | %s | %s |\n", r.name.c_str(), r.frames,
                 pct(r.ground.precision()).c_str(), pct(r.ground.recall()).c_str(),
                 pct(r.baseline.precision()).c_str(), pct(r.baseline.recall()).c_str());
+  if (opt.per_frame) {
+    std::printf("\n| data | frame | ground precision | ground recall |\n|---|---|---|---|\n");
+    for (const auto& r : results)
+      for (std::size_t f = 0; f < r.ground_per_frame.size(); ++f)
+        std::printf("| %s | %zu | %s | %s |\n", r.name.c_str(), f + std::size_t(opt.first),
+                    pct(r.ground_per_frame[f].precision()).c_str(),
+                    pct(r.ground_per_frame[f].recall()).c_str());
+  }
   std::printf("\nFalse ground (non-ground points called ground) by their true class:\n\n");
   for (const auto& r : results) {
     std::vector<std::pair<std::size_t, std::uint16_t>> sorted;
@@ -371,6 +452,17 @@ int run(int argc, char** argv) {
                 pct(o.rate(o.missed)).c_str(),
                 pct(r.instance_points ? double(r.unplaced_instance_points) / r.instance_points : 0)
                     .c_str());
+  }
+  std::printf("\nObject outcomes by class (scored / recovered / over-segmented / merged):\n\n");
+  for (const auto& r : results) {
+    std::printf("- %s:", r.name.c_str());
+    bool first = true;
+    for (const auto& [cls, row] : r.by_class) {
+      std::printf("%s %s %zu/%zu/%zu/%zu", first ? "" : ",", className(cls).c_str(), row[0], row[1],
+                  row[2], row[3]);
+      first = false;
+    }
+    std::printf("\n");
   }
   std::printf(
       "\n| data | points/frame | ground ms/frame | organize ms/frame | segment ms/frame |\n"

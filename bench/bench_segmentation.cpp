@@ -204,6 +204,18 @@ void BM_Ground_GroundPlaneFilter(benchmark::State& state) {
 }
 BENCHMARK(BM_Ground_GroundPlaneFilter)->Unit(benchmark::kMillisecond);
 
+void BM_Ground_GroundPlaneFilter_PlaneOnly(benchmark::State& state) {
+  // The plane-distance test alone (local-slope test off): what the column test costs and buys.
+  pcl_movers::GroundPlaneFilter<Point> filter;
+  filter.setNegative(true);
+  filter.setLocalSlopeCheck(false);
+  runGround(state, [&](const Frame& fr, pcl::Indices& ground) {
+    filter.setInputCloud(fr.image);
+    filter.filter(ground);
+  });
+}
+BENCHMARK(BM_Ground_GroundPlaneFilter_PlaneOnly)->Unit(benchmark::kMillisecond);
+
 void BM_Ground_SACSegmentation_ExtractIndices(benchmark::State& state) {
   pcl::SACSegmentation<Point> sac;
   sac.setModelType(pcl::SACMODEL_PLANE);

@@ -54,7 +54,8 @@ def ms(name):
 def fmt(v): return "–" if v is None else f"{v:.2f}"
 print("| step | method | CPU ms / frame | quality on the same frames |")
 print("|---|---|---|---|")
-g = [("BM_Ground_GroundPlaneFilter", "pcl_movers::GroundPlaneFilter (local planes, polar cells)"),
+g = [("BM_Ground_GroundPlaneFilter", "pcl_movers::GroundPlaneFilter (local planes, polar cells, column local-slope test)"),
+     ("BM_Ground_GroundPlaneFilter_PlaneOnly", "pcl_movers::GroundPlaneFilter, plane distance only (`setLocalSlopeCheck(false)`)"),
      ("BM_Ground_SACSegmentation_ExtractIndices", "pcl::SACSegmentation (one global plane, RANSAC, 0.2 m) + pcl::ExtractIndices")]
 for key, label in g:
     b = rows.get(key)

@@ -61,7 +61,35 @@ if [[ ${#args[@]} -eq 0 ]]; then
   echo "_No labelled data available: nothing evaluated._"
   exit 0
 fi
-"$eval_bin" "${args[@]}" 2>/dev/null
+"$eval_bin" "${args[@]}" --per-frame 2>/dev/null
+
+if [[ ${#args[@]} -gt 0 ]]; then
+  echo
+  echo "Ground precision / recall trade-off of the local-slope test (default: 20°, 0.02 m range noise,"
+  echo "0.3 m neighbour band; the angle was chosen as steeper than drivable ground, not tuned on"
+  echo "these frames). Each cell: precision / recall."
+  echo
+  header="| setting |"
+  rule="|---|"
+  for a in "${args[@]}"; do
+    [[ "$a" == --* ]] && continue
+    header="$header $(basename "$a") |"
+    rule="$rule---|"
+  done
+  echo "$header"
+  echo "$rule"
+  for setting in "--no-local-slope" "--local-slope-deg 10" "--local-slope-deg 15" \
+    "--local-slope-deg 20" "--local-slope-deg 25" "--local-slope-deg 30" "--range-noise 0.03"; do
+    # shellcheck disable=SC2086
+    out=$("$eval_bin" "${args[@]}" $setting 2>/dev/null)
+    row="| \`$setting\` |"
+    while IFS= read -r line; do
+      p=$(echo "$line" | awk -F'|' '{gsub(/ /,"",$4); gsub(/ /,"",$5); print $4 " / " $5}')
+      row="$row $p |"
+    done < <(echo "$out" | awk '/^\| data \| frames \|/{f=1; next} f && /^\|---/{next} f && /^\|/{print; next} f{exit}')
+    echo "$row"
+  done
+fi
 
 if [[ -f "$kitti/labels/000000.label" ]]; then
   echo

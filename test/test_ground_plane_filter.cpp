@@ -10,7 +10,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <functional>
 #include <limits>
@@ -111,6 +113,93 @@ void expectGoodSeparation(const std::function<float(float, float)>& z_of, const 
   EXPECT_GT(s.recall, 0.97) << name;
 }
 
+/** An organized scan (rows = 64 beams from +2° down to -24.9°, like an HDL-64E; `columns` azimuth
+ * steps over 360°) ray-cast onto the surface z = terrain(x, y) + object(x, y), with Gaussian
+ * range noise. A cell's truth is ground when object(x, y) is 0 where its ray hits. */
+Scene castOrganized(const std::function<float(float, float)>& terrain,
+                    const std::function<float(float, float)>& object, int columns = 1024,
+                    float range_noise = 0.01f, unsigned seed = 3) {
+  Scene scene;
+  const int rows = 64;
+  std::mt19937 rng(seed);
+  std::normal_distribution<float> noise(0.f, range_noise);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  auto above = [&](const Eigen::Vector3f& p) {
+    return p.z() > terrain(p.x(), p.y()) + object(p.x(), p.y());
+  };
+  for (int row = 0; row < rows; ++row) {
+    const float elevation = (2.f - 26.9f * float(row) / float(rows - 1)) * float(M_PI) / 180.f;
+    for (int col = 0; col < columns; ++col) {
+      const float azimuth = 2.f * float(M_PI) * float(col) / float(columns) - float(M_PI);
+      const Eigen::Vector3f d(std::cos(elevation) * std::cos(azimuth),
+                              std::cos(elevation) * std::sin(azimuth), std::sin(elevation));
+      // March in 4 cm steps (finer than the rough surfaces below), then bisect to 1 mm.
+      float t0 = 0.5f, t1 = -1.f;
+      for (float t = 0.5f; t < 80.f; t += 0.04f) {
+        if (!above(t * d)) {
+          t1 = t;
+          break;
+        }
+        t0 = t;
+      }
+      if (t1 < 0.f) {
+        scene.add(nan, nan, nan, -1);
+        continue;
+      }
+      while (t1 - t0 > 0.001f) {
+        const float tm = 0.5f * (t0 + t1);
+        (above(tm * d) ? t0 : t1) = tm;
+      }
+      const Eigen::Vector3f hit = t1 * d;
+      const Eigen::Vector3f p = (t1 + noise(rng)) * d;
+      scene.add(p.x(), p.y(), p.z(), object(hit.x(), hit.y()) > 0.f ? 0 : 1);
+    }
+  }
+  scene.cloud->width = columns;
+  scene.cloud->height = rows;
+  scene.cloud->is_dense = false;
+  return scene;
+}
+
+/** Ground and object points called ground by a filter configured by `setup`. */
+struct Counts {
+  std::size_t ground = 0, ground_kept = 0, object = 0, object_as_ground = 0;
+};
+Counts countGround(const Scene& scene, bool slope_check) {
+  GroundPlaneFilter<pcl::PointXYZ> filter;
+  filter.setInputCloud(scene.cloud);
+  filter.setNegative(true);
+  filter.setLocalSlopeCheck(slope_check);
+  pcl::Indices ground;
+  filter.filter(ground);
+  std::vector<bool> called(scene.cloud->size(), false);
+  for (const auto i : ground) called[i] = true;
+  Counts c;
+  for (std::size_t i = 0; i < called.size(); ++i) {
+    if (scene.is_ground[i] == 1) {
+      ++c.ground;
+      c.ground_kept += called[i];
+    } else if (scene.is_ground[i] == 0) {
+      ++c.object;
+      c.object_as_ground += called[i];
+    }
+  }
+  return c;
+}
+
+/** A low bush: a patch whose height jumps between 0 and 0.25 m every 10 cm (rough, like grass
+ * tufts and shrubs), 0 outside the patch. */
+float bush(float x, float y, float x0, float x1, float y0, float y1) {
+  if (x < x0 || x > x1 || y < y0 || y > y1) return 0.f;
+  const auto ix = static_cast<std::uint32_t>(std::floor(x * 10.f) + 10000.f);
+  const auto iy = static_cast<std::uint32_t>(std::floor(y * 10.f) + 10000.f);
+  std::uint32_t h = ix * 73856093u ^ iy * 19349663u;
+  h ^= h >> 13;
+  h *= 0x5bd1e995u;
+  h ^= h >> 15;
+  return 0.25f * static_cast<float>(h % 1000u) / 999.f + 1e-3f;
+}
+
 }  // namespace
 
 TEST(GroundPlaneFilter, FlatGroundWithObjects) {
@@ -149,6 +238,120 @@ TEST(GroundPlaneFilter, AGlobalThresholdFailsOnTheRamp) {
   for (std::size_t i = 0; i < scene.cloud->size(); ++i)
     if ((*scene.cloud)[i].z < -kSensorHeight + 0.25f) ground.push_back(static_cast<int>(i));
   EXPECT_LT(score(scene, ground).recall, 0.9);
+}
+
+// ------------------------------------------------------------- local-slope test (organized)
+
+TEST(GroundPlaneFilter, RoughLowBushIsNotGround) {
+  // Flat road with a low rough bush 6-9 m ahead: the lower part of the bush is within the plane
+  // distance threshold, so the plane test alone calls much of it ground; the column slope test
+  // must reject it while the road (with 1 cm range noise) stays ground.
+  const auto terrain = [](float, float) { return -kSensorHeight; };
+  const auto object = [](float x, float y) { return bush(x, y, 6.f, 9.f, -2.f, 2.f); };
+  const Scene scene = castOrganized(terrain, object);
+  const Counts plain = countGround(scene, false);
+  const Counts checked = countGround(scene, true);
+  ASSERT_GT(checked.object, 500u);
+  // The case is meaningful: the bush fills whole cells, their planes settle on it, and without
+  // the slope test most of the bush is "ground".
+  EXPECT_GT(plain.object_as_ground, checked.object / 2);
+  // Rises of a few centimetres between tufts 20 cm apart are not steep, so not every bush point
+  // is caught; the test must still remove well over half of what the plane test let through.
+  EXPECT_LT(checked.object_as_ground, plain.object_as_ground / 2);
+  EXPECT_GT(double(checked.ground_kept) / double(checked.ground), 0.97);
+}
+
+TEST(GroundPlaneFilter, WallBaseIsNotGroundRoadAtItsFootIs) {
+  // A wall 12 m ahead: its lowest 10 cm are within the distance threshold but rise vertically.
+  const auto terrain = [](float, float) { return -kSensorHeight; };
+  const auto object = [](float x, float y) {
+    return x > 12.f && x < 12.3f && std::abs(y) < 6.f ? 3.f : 0.f;
+  };
+  const Scene scene = castOrganized(terrain, object);
+  Counts plain = countGround(scene, false), checked = countGround(scene, true);
+  // Count only the wall's points low enough to pass the distance test.
+  std::size_t low = 0, low_as_ground = 0;
+  {
+    GroundPlaneFilter<pcl::PointXYZ> filter;
+    filter.setInputCloud(scene.cloud);
+    filter.setNegative(true);
+    pcl::Indices ground;
+    filter.filter(ground);
+    std::vector<bool> called(scene.cloud->size(), false);
+    for (const auto i : ground) called[i] = true;
+    for (std::size_t i = 0; i < called.size(); ++i)
+      if (scene.is_ground[i] == 0 && (*scene.cloud)[i].z < -kSensorHeight + 0.1f) {
+        ++low;
+        low_as_ground += called[i];
+      }
+  }
+  ASSERT_GT(low, 20u);
+  EXPECT_LT(low_as_ground, low / 5);
+  EXPECT_LE(checked.object_as_ground, plain.object_as_ground);
+  EXPECT_GT(double(checked.ground_kept) / double(checked.ground), 0.97);
+}
+
+TEST(GroundPlaneFilter, OrganizedKerbStaysGround) {
+  // A 12 cm kerb 4 m to the left: road and sidewalk are ground; at most the beams hitting the
+  // kerb face are lost to the slope test.
+  const auto terrain = [](float, float y) { return -kSensorHeight + (y > 4.f ? 0.12f : 0.f); };
+  const auto object = [](float, float) { return 0.f; };
+  const Scene scene = castOrganized(terrain, object);
+  const Counts c = countGround(scene, true);
+  EXPECT_GT(double(c.ground_kept) / double(c.ground), 0.97);
+}
+
+TEST(GroundPlaneFilter, OrganizedSmoothSlopesStayGround) {
+  // An 8° ramp ahead and rolling terrain elsewhere: smooth rises are not steep.
+  const auto terrain = [](float x, float y) {
+    return -kSensorHeight + (x > 8.f ? 0.14f * (x - 8.f) : 0.f) +
+           0.8f * std::sin(y / 9.f) * std::cos(x / 13.f) * std::min(1.f, std::hypot(x, y) / 20.f);
+  };
+  const auto object = [](float, float) { return 0.f; };
+  const Scene scene = castOrganized(terrain, object);
+  const Counts plain = countGround(scene, false), checked = countGround(scene, true);
+  EXPECT_GT(double(checked.ground_kept) / double(checked.ground), 0.97);
+  // The slope test costs (almost) nothing on smooth terrain.
+  EXPECT_GT(double(checked.ground_kept), 0.99 * double(plain.ground_kept));
+}
+
+TEST(GroundPlaneFilter, IsolatedNoiseSpikeStaysGround) {
+  // One point of flat road 6 cm too high (an outlier within the distance threshold) makes a
+  // steep rise to its column neighbours, but no row neighbour is rough: it stays ground. A
+  // 0.6 m wide strip raised the same way is rough over many columns and is rejected.
+  const auto terrain = [](float, float) { return -kSensorHeight; };
+  const auto none = [](float, float) { return 0.f; };
+  Scene scene = castOrganized(terrain, none, 1024, 0.f);
+  const int width = static_cast<int>(scene.cloud->width);
+  const int spike = 56 * width + 512;  // a low beam straight behind, a few metres out
+  ASSERT_TRUE(std::isfinite((*scene.cloud)[spike].z));
+  (*scene.cloud)[spike].z += 0.06f;
+  GroundPlaneFilter<pcl::PointXYZ> filter;
+  filter.setInputCloud(scene.cloud);
+  filter.setNegative(true);
+  pcl::Indices ground;
+  filter.filter(ground);
+  EXPECT_TRUE(std::find(ground.begin(), ground.end(), spike) != ground.end());
+  for (int c = 0; c < 12; ++c) (*scene.cloud)[56 * width + 200 + c].z += 0.06f;
+  filter.filter(ground);
+  int strip_ground = 0;
+  for (int c = 0; c < 12; ++c)
+    strip_ground += std::find(ground.begin(), ground.end(), 56 * width + 200 + c) != ground.end();
+  EXPECT_LT(strip_ground, 3);
+}
+
+TEST(GroundPlaneFilter, LocalSlopeNeedsAnOrganizedCloud) {
+  // The same scan flattened to one row has no beam neighbours: the slope test cannot run and
+  // the result equals the plane test alone.
+  const auto terrain = [](float, float) { return -kSensorHeight; };
+  const auto object = [](float x, float y) { return bush(x, y, 6.f, 9.f, -2.f, 2.f); };
+  Scene scene = castOrganized(terrain, object);
+  const Counts plain = countGround(scene, false);
+  scene.cloud->width = static_cast<std::uint32_t>(scene.cloud->size());
+  scene.cloud->height = 1;
+  const Counts flat = countGround(scene, true);
+  EXPECT_EQ(flat.object_as_ground, plain.object_as_ground);
+  EXPECT_EQ(flat.ground_kept, plain.ground_kept);
 }
 
 TEST(GroundPlaneFilter, NegativeAndDefaultAreComplementary) {
@@ -230,6 +433,36 @@ TEST(GroundPlaneFilter, Deterministic) {
   Scene scene = makeGround(z_of, 7);
   addBox(scene, z_of, 10.f, 0.f, 4.f, 2.f, 1.5f);
   EXPECT_EQ(groundOf(scene.cloud), groundOf(scene.cloud));
+}
+
+TEST(GroundPlaneFilter, ReusedFilterMatchesAFreshOne) {
+  // The filter keeps work buffers between calls and its RANSAC must restart from the same seed
+  // every call: one instance run over frames of different sizes and layouts must give exactly
+  // what a fresh instance gives on each frame.
+  auto rolling = [](float x, float y) {
+    return -kSensorHeight + 0.5f * std::sin(x / 10.f + y / 13.f);
+  };
+  Scene unorganized = makeGround(rolling, 11);
+  addBox(unorganized, rolling, 10.f, 0.f, 4.f, 2.f, 1.5f);
+  addBox(unorganized, rolling, -6.f, 8.f, 2.f, 2.f, 1.0f);
+  const auto kerb = [](float, float y) { return -kSensorHeight + (y > 4.f ? 0.12f : 0.f); };
+  const auto car = [](float x, float y) {
+    return std::abs(x - 12.f) < 2.f && std::abs(y + 3.f) < 1.f ? 1.4f : 0.f;
+  };
+  const Scene organized = castOrganized(kerb, car);
+  ASSERT_GT(organized.cloud->height, 1u);
+  const std::vector<Cloud::Ptr> frames{unorganized.cloud, organized.cloud, unorganized.cloud,
+                                       organized.cloud};
+  GroundPlaneFilter<pcl::PointXYZ> reused;
+  reused.setNegative(true);
+  for (std::size_t f = 0; f < frames.size(); ++f) {
+    pcl::Indices ground;
+    reused.setInputCloud(frames[f]);
+    reused.filter(ground);
+    const pcl::Indices fresh = groundOf(frames[f]);
+    EXPECT_GT(fresh.size(), frames[f]->size() / 2) << "frame " << f;
+    EXPECT_EQ(ground, fresh) << "frame " << f;
+  }
 }
 
 TEST(GroundPlaneFilter, EmptyAndNanOnlyInputs) {

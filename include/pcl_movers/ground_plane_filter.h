@@ -34,6 +34,21 @@ namespace pcl_movers {
  * ~4 points of precision on SemanticKITTI: planes that sit a little high near walls and bushes then
  * swallow their lower parts.)
  *
+ * **Local-slope test (organized inputs only).** A plane-distance test alone calls everything
+ * within the threshold ground, including the lowest few centimetres of bushes, hedges, grass
+ * tufts and wall bases, which dominate its false positives on SemanticKITTI. The range image
+ * tells them apart cheaply: along a column (one azimuth, consecutive beams) ground rises slowly
+ * with horizontal distance, while vegetation and walls rise steeply. A point that passed the
+ * distance test is rejected when the rise to the point of the beam just above or below it,
+ * minus `getRangeNoise()`, exceeds tan(`getMaxLocalSlope()`) times their horizontal distance —
+ * the angle criterion of Bogoslavskyi & Stachniss' depth_clustering ground labelling, made
+ * noise-aware because near the sensor consecutive beams hit the road only ~0.1 m apart and
+ * 2 cm of range noise would otherwise look like a 10° slope. Neighbours further than
+ * `getLocalSlopeBand()` from their plane are objects standing on the ground and are ignored, so
+ * the road at the foot of a car or wall stays ground. Heights are measured from each point's own
+ * cell plane, so slopes and rolling terrain are not mistaken for steep rises; a kerb costs at most
+ * the one beam that hits its face.
+ *
  * Because each cell has its own plane and planes are chained ring to ring, slopes, kerbs, ramps and
  * rolling terrain are followed; the cloud need not be organized (the cells are built from x, y).
  *
@@ -130,6 +145,28 @@ class GroundPlaneFilter : public pcl::FilterIndices<PointT> {
   void setMaxIterations(int n) { max_iterations_ = n; }
   int getMaxIterations() const { return max_iterations_; }
 
+  /** \brief Whether to apply the local-slope test on organized inputs (default true; ignored on
+   * unorganized clouds, which have no beam neighbours). */
+  void setLocalSlopeCheck(bool check) { local_slope_check_ = check; }
+  bool getLocalSlopeCheck() const { return local_slope_check_; }
+
+  /** \brief Steepest local slope [rad] between a point and the points of the beams just above
+   * and below it in its column (default 20°); see the class description. */
+  void setMaxLocalSlope(float radians) { max_local_slope_ = radians; }
+  float getMaxLocalSlope() const { return max_local_slope_; }
+
+  /** \brief Height noise [m] forgiven in the local-slope test (default 0.02, the HDL-64E's range
+   * noise): a rise counts as steep only when it exceeds this plus tan(max local slope) times the
+   * horizontal distance. */
+  void setRangeNoise(float noise) { range_noise_ = noise; }
+  float getRangeNoise() const { return range_noise_; }
+
+  /** \brief Column neighbours further than this [m] from their plane do not take part in the
+   * local-slope test (default 0.3): they belong to an object standing on the ground (a wall, a
+   * car), and the step up to them says nothing about the point at its foot. */
+  void setLocalSlopeBand(float band) { local_slope_band_ = band; }
+  float getLocalSlopeBand() const { return local_slope_band_; }
+
   /** \brief Plane used by each cell in the last run, ring-major (ring * sectors + sector). */
   const std::vector<Plane>& getCellPlanes() const { return cell_planes_; }
   /** \brief Whether each cell of the last run fitted its own plane (false = inherited). */
@@ -146,7 +183,7 @@ class GroundPlaneFilter : public pcl::FilterIndices<PointT> {
    * fails or is too steep or too far from `prior` (more than `band` at `centre`). */
   bool fitPlane(const pcl::Indices& candidates, const Plane& prior, float band,
                 const Eigen::Vector2f& centre, SacModelPtr& model,
-                pcl::RandomSampleConsensus<PointT>& ransac, Plane& fitted) const;
+                pcl::RandomSampleConsensus<PointT>& ransac, Plane& fitted);
 
   /** \brief Ring of a horizontal distance r (binary search over ring_edges_). */
   int ringOf(float r) const;
@@ -163,12 +200,20 @@ class GroundPlaneFilter : public pcl::FilterIndices<PointT> {
   int min_points_per_cell_ = 12;
   int max_samples_ = 64;
   int max_iterations_ = 40;
+  bool local_slope_check_ = true;
+  float max_local_slope_ = 0.349f;  // 20°
+  float range_noise_ = 0.02f;
+  float local_slope_band_ = 0.3f;
 
   std::vector<Plane> cell_planes_;
   std::vector<std::uint8_t> cell_fitted_;
   // Work buffers kept between calls so a sequence of frames does not reallocate.
-  std::vector<int> cell_of_, cell_start_, cell_points_, ring_lut_;
+  std::vector<int> cell_of_, cell_start_, cell_fill_, cell_points_, ring_lut_;
   std::vector<Eigen::Vector3f> cell_xyz_;
+  std::vector<float> height_;  ///< per point of the input: height above its plane, NaN if unused
+  std::vector<std::uint8_t> steep_;  ///< per point: the local-slope test flagged it
+  pcl::IndicesPtr sample_;           ///< RANSAC subsample of the current cell
+  pcl::Indices inliers_;             ///< inliers of the current cell's plane
 };
 
 }  // namespace pcl_movers

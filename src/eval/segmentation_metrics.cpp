@@ -126,7 +126,9 @@ std::vector<int> instancesFromLabels(const std::vector<std::uint32_t>& labels,
 
 ObjectScore scoreObjects(const std::vector<int>& instance_of, const std::vector<int>& cluster_of,
                          std::size_t min_points, double min_fraction,
-                         const std::vector<std::uint8_t>* scored) {
+                         const std::vector<std::uint8_t>* scored,
+                         std::vector<InstanceOutcome>* outcomes) {
+  if (outcomes) outcomes->clear();
   const std::size_t n = std::min(instance_of.size(), cluster_of.size());
   auto use = [&](std::size_t i) { return !scored || (i < scored->size() && (*scored)[i]); };
   std::unordered_map<int, std::size_t> instance_size, cluster_size;
@@ -157,6 +159,17 @@ ObjectScore scoreObjects(const std::vector<int>& instance_of, const std::vector<
     if (under) ++s.under_segmented;
     if (!recovered && pieces >= 2) ++s.over_segmented;
     if (!recovered && pieces < 2 && !under) ++s.missed;
+    if (outcomes) {
+      InstanceOutcome o;
+      o.instance = inst;
+      o.points = size;
+      o.share = double(best) / double(size);
+      o.recovered = recovered;
+      o.under_segmented = under;
+      o.over_segmented = !recovered && pieces >= 2;
+      o.missed = !recovered && pieces < 2 && !under;
+      outcomes->push_back(o);
+    }
   }
   return s;
 }

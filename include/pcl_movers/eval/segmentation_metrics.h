@@ -72,12 +72,23 @@ struct ObjectScore {
   }
 };
 
+/** \brief The outcome of one scored instance (see ObjectScore for the definitions). */
+struct InstanceOutcome {
+  int instance = 0;
+  std::size_t points = 0;  ///< scored points of the instance
+  double share = 0.0;      ///< fraction of them in its best cluster
+  bool recovered = false, under_segmented = false, over_segmented = false, missed = false;
+};
+
 /** \brief Scores clusters against instances. `instance_of` and `cluster_of` hold one entry per
  * point (same order); instance 0 = none, cluster -1 = in no cluster. Points where `scored` is
- * false (if given) are left out entirely (e.g. points the organizer could not place). */
+ * false (if given) are left out entirely (e.g. points the organizer could not place). When
+ * `outcomes` is given it receives one entry per scored instance (to break results down by
+ * class). */
 ObjectScore scoreObjects(const std::vector<int>& instance_of, const std::vector<int>& cluster_of,
                          std::size_t min_points = 30, double min_fraction = 0.8,
-                         const std::vector<std::uint8_t>* scored = nullptr);
+                         const std::vector<std::uint8_t>* scored = nullptr,
+                         std::vector<InstanceOutcome>* outcomes = nullptr);
 
 /** \brief Per-point cluster ids (-1 = none) from a cluster list over `num_points` points. */
 std::vector<int> clusterIds(const std::vector<pcl::PointIndices>& clusters, std::size_t num_points);

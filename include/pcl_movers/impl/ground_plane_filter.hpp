@@ -57,20 +57,22 @@ bool GroundPlaneFilter<PointT>::fitPlane(const pcl::Indices& candidates, const P
                                          float band, const Eigen::Vector2f& centre,
                                          SacModelPtr& model,
                                          pcl::RandomSampleConsensus<PointT>& ransac,
-                                         Plane& fitted) const {
+                                         Plane& fitted) {
   // RANSAC on an evenly strided subsample: the inlier ratio is high, so a few dozen points and
   // iterations find the plane; the refit below uses every inlier of the subsample.
   const std::size_t stride =
       (candidates.size() + static_cast<std::size_t>(max_samples_) - 1) / max_samples_;
-  pcl::IndicesPtr sample(new pcl::Indices);
-  for (std::size_t j = 0; j < candidates.size(); j += stride) sample->push_back(candidates[j]);
-  model->setIndices(sample);
+  if (!sample_) sample_.reset(new pcl::Indices);
+  sample_->clear();
+  for (std::size_t j = 0; j < candidates.size(); j += stride) sample_->push_back(candidates[j]);
+  model->setIndices(sample_);
   if (!ransac.computeModel()) return false;
-  pcl::Indices inliers;
-  ransac.getInliers(inliers);
-  if (inliers.size() < 6) return false;  // too few to refit (PCL needs more than 3)
-  Eigen::VectorXf coefficients, refined;
+  ransac.getInliers(inliers_);
+  Eigen::VectorXf coefficients;
   ransac.getModelCoefficients(coefficients);
+  const pcl::Indices& inliers = inliers_;
+  if (inliers.size() < 6) return false;  // too few to refit (PCL needs more than 3)
+  Eigen::VectorXf refined;
   model->optimizeModelCoefficients(inliers, coefficients, refined);
   Eigen::Vector3f normal = refined.head<3>();
   const float norm = normal.norm();
@@ -121,10 +123,12 @@ void GroundPlaneFilter<PointT>::applyFilter(pcl::Indices& indices) {
   for (std::size_t i = 1; i < ring_edges_.size(); ++i)
     edges_ok = edges_ok && ring_edges_[i] > ring_edges_[i - 1];
   if (!edges_ok || num_sectors_ < 1 || !(distance_threshold_ > 0.f) || !(fit_threshold_ > 0.f) ||
-      !(max_tilt_ >= 0.f) || max_samples_ < 3 || max_iterations_ < 1) {
+      !(max_tilt_ >= 0.f) || max_samples_ < 3 || max_iterations_ < 1 ||
+      !(max_local_slope_ >= 0.f) || !(range_noise_ >= 0.f) || !(local_slope_band_ >= 0.f)) {
     PCL_ERROR(
         "[pcl_movers::%s::applyFilter] Invalid parameters (ring edges must start at 0 and "
-        "increase; sectors, thresholds, samples and iterations must be positive).\n",
+        "increase; sectors, thresholds, samples and iterations must be positive; local-slope "
+        "parameters must be >= 0).\n",
         filter_name_.c_str());
     // Nothing was classified: report every point as removed so callers do not mistake an
     // error for "no ground".
@@ -184,7 +188,8 @@ void GroundPlaneFilter<PointT>::applyFilter(pcl::Indices& indices) {
   // sequentially instead of jumping around the cloud (that was the filter's main cost).
   cell_xyz_.resize(cell_points.size());
   {
-    std::vector<int> fill(cell_start.begin(), cell_start.end() - 1);
+    std::vector<int>& fill = cell_fill_;
+    fill.assign(cell_start.begin(), cell_start.end() - 1);
     for (std::size_t k = 0; k < n; ++k)
       if (cell_of[k] >= 0) {
         const int j = fill[cell_of[k]]++;
@@ -205,7 +210,10 @@ void GroundPlaneFilter<PointT>::applyFilter(pcl::Indices& indices) {
            0.5f * (ring_edges_[ring] - (ring > 0 ? ring_edges_[ring - 1] : 0.f));
   };
 
-  SacModelPtr model(new SacModel(input_, /*random=*/false));
+  // Built on an empty index list: the cloud constructor would fill (and copy) an index per point
+  // of the frame, only for fitPlane to replace them with the cell's subsample. A fresh model per
+  // call keeps the fixed seed, so every frame's RANSAC draws are reproducible.
+  SacModelPtr model(new SacModel(input_, pcl::Indices(), /*random=*/false));
   model->setAxis(Eigen::Vector3f::UnitZ());
   model->setEpsAngle(max_tilt_);
   pcl::RandomSampleConsensus<PointT> ransac(model, fit_threshold_);
@@ -267,7 +275,58 @@ void GroundPlaneFilter<PointT>::applyFilter(pcl::Indices& indices) {
     }
   }
 
-  // Pass 3: classify in input order so the output keeps the input's point order.
+  // Pass 3: height of every point above its cell's plane, then classify in input order so the
+  // output keeps the input's point order.
+  const bool organized = input_->height > 1 &&
+                         static_cast<std::size_t>(input_->width) * input_->height == input_->size();
+  const bool slope_check = local_slope_check_ && organized;
+  // In cell order: one plane per run of points and the coordinates read sequentially.
+  height_.assign(input_->size(), std::numeric_limits<float>::quiet_NaN());
+  for (int c = 0; c < num_cells; ++c) {
+    const Plane& plane = cell_planes_[c];
+    for (int j = cell_start[c]; j < cell_start[c + 1]; ++j)
+      height_[cell_points[j]] = plane.height(cell_xyz_[j]);
+  }
+  const int width = static_cast<int>(input_->width);
+  const int image_size = static_cast<int>(input_->size());
+  const float tan_slope = std::tan(std::min(max_local_slope_, 1.5707f));
+  const float tan2_slope = tan_slope * tan_slope;
+  // Steep rise between a ground candidate and its column neighbours (see the class description).
+  auto steep = [&](int idx) {
+    const float h = height_[idx];
+    const Eigen::Vector3f p = (*input_)[idx].getVector3fMap();
+    for (const int dr : {-1, 1}) {
+      // The row above / below exists iff its index stays inside the image (width * rows
+      // points): no integer division per candidate to find the row.
+      const int j = idx + dr * width;
+      if (j < 0 || j >= image_size) continue;
+      const float hj = height_[j];
+      if (!(std::abs(hj) <= local_slope_band_)) continue;  // NaN, or an object on the ground
+      const float rise = std::abs(hj - h) - range_noise_;
+      if (rise <= 0.f) continue;
+      const Eigen::Vector3f q = (*input_)[j].getVector3fMap();
+      // rise > tan(slope) * horizontal distance, squared (both sides >= 0): no square root.
+      if (rise * rise > tan2_slope * (q - p).template head<2>().squaredNorm()) return true;
+    }
+    return false;
+  };
+  // Steep flags of the ground candidates; a flag counts only when a row neighbour (same beam,
+  // next azimuth) is flagged too: vegetation and wall bases are rough over several columns, while
+  // range noise on the road flags isolated points.
+  if (slope_check) {
+    steep_.assign(input_->size(), 0);
+    for (std::size_t k = 0; k < n; ++k) {
+      const int idx = (*indices_)[k];
+      if (cell_of[k] >= 0 && std::abs(height_[idx]) < distance_threshold_) steep_[idx] = steep(idx);
+    }
+  }
+  auto rejected = [&](int idx) {
+    if (!steep_[idx]) return false;
+    const int col = idx % width;
+    const int left = col > 0 ? idx - 1 : idx + width - 1;
+    const int right = col + 1 < width ? idx + 1 : idx - width + 1;
+    return steep_[left] || steep_[right];
+  };
   indices.reserve(n);
   for (std::size_t k = 0; k < n; ++k) {
     const int idx = (*indices_)[k];
@@ -275,8 +334,8 @@ void GroundPlaneFilter<PointT>::applyFilter(pcl::Indices& indices) {
       if (extract_removed_indices_) removed_indices_->push_back(idx);
       continue;
     }
-    const bool ground = std::abs(cell_planes_[cell_of[k]].height((*input_)[idx].getVector3fMap())) <
-                        distance_threshold_;
+    const bool ground =
+        std::abs(height_[idx]) < distance_threshold_ && !(slope_check && rejected(idx));
     if (ground == negative_)
       indices.push_back(idx);
     else if (extract_removed_indices_)
