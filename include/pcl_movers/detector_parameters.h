@@ -33,6 +33,9 @@ struct DetectorParameters {
   double ground_distance = 0.25;
   /// Largest slope of a ground plane [deg].
   double ground_max_slope_deg = 15.0;
+  /// 1 = GroundPlaneFilter's column local-slope test (rejects rough low vegetation and wall bases
+  /// that lie within ground_distance of the plane; see docs/design.md), 0 = plane distance only.
+  int ground_local_slope = 0;
 
   // ------------------------------------------------------------------ segmentation
   /// Region growing joins range-image neighbours whose depth differs by less than
@@ -175,6 +178,7 @@ void DetectorParameters::forEachParameter(F&& f) {
   f("sensor_height", sensor_height, "sensor height above the ground [m]");
   f("ground_distance", ground_distance, "max distance of ground points from their plane [m]");
   f("ground_max_slope_deg", ground_max_slope_deg, "max ground slope [deg]");
+  f("ground_local_slope", ground_local_slope, "1 = column local-slope test on the ground");
   f("depth_ratio", depth_ratio, "region growing depth threshold d_T / range");
   f("depth_min", depth_min, "lower bound of d_T [m]");
   f("max_gap", max_gap, "empty range-image cells bridged by region growing");
@@ -349,6 +353,8 @@ inline void DetectorParameters::validate() const {
     throw InputError("parameters free_space_margin(_per_metre) must be >= 0");
   if (hold_confirmed != 0 && hold_confirmed != 1)
     throw InputError("parameter hold_confirmed must be 0 or 1");
+  if (ground_local_slope != 0 && ground_local_slope != 1)
+    throw InputError("parameter ground_local_slope must be 0 or 1");
   if (mover_latch != 0 && mover_latch != 1)
     throw InputError("parameter mover_latch must be 0 or 1");
   if (max_missed_frames < 0) throw InputError("parameter max_missed_frames must be >= 0");

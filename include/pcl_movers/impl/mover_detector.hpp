@@ -111,10 +111,7 @@ void MoverDetector<PointT>::process(const PointCloudConstPtr& scan, const Eigen:
   ground.setDistanceThreshold(static_cast<float>(p.ground_distance));
   ground.setMaxTilt(static_cast<float>(p.ground_max_slope_deg * M_PI / 180.0));
   ground.setSensorHeight(static_cast<float>(p.sensor_height));
-  // The column local-slope test (GroundPlaneFilter's default) raised false alarms on
-  // kitti-tracking-0000-a with this pipeline's 0.25 m distance: off until the tracker is tuned for
-  // it.
-  ground.setLocalSlopeCheck(false);
+  ground.setLocalSlopeCheck(p.ground_local_slope != 0);
   pcl::IndicesPtr objects(new pcl::Indices);
   ground.filter(*objects);
 
