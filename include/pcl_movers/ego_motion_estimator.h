@@ -7,90 +7,80 @@
 #include <pcl/point_types.h>
 
 #include <Eigen/Geometry>
-#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <deque>
-#include <limits>
+#include <unordered_map>
 #include <vector>
 
 namespace pcl_movers {
 namespace detail {
 
-/** \brief Open-addressing hash table from a packed voxel key to an int, for the estimator's
- * voxel maps. Replaces std::unordered_map (one heap node per entry, a pointer chase per
- * lookup): lookups are the inner loop of the registration and this table resolves most of them
- * in one cache line. Entries are never erased (the callers keep empty voxels and rebuild). */
-class VoxelHashIndex {
+/** \brief Points hashed into cubic cells, for nearest-neighbour and radius queries no further than
+ * one cell. Used instead of pcl::KdTreeFLANN because FLANN opens an OpenMP region per query, which
+ * cost more than the searches themselves (over half the run time, and far worse on a loaded
+ * machine), and because a hash grid is built in linear time when the map changes. */
+class PointHashGrid {
  public:
-  static constexpr std::int64_t kEmpty = std::numeric_limits<std::int64_t>::min();
-
-  /** \brief Empties the table, sized for about `expected` entries. */
-  void clear(std::size_t expected = 0) {
-    std::size_t cap = 16;
-    while (cap < 2 * expected + 2) cap *= 2;
-    keys_.assign(cap, kEmpty);
-    values_.assign(cap, -1);
-    mask_ = cap - 1;
-    size_ = 0;
+  void build(const std::vector<Eigen::Vector3f>& points, float cell) {
+    points_ = &points;
+    cell_ = cell;
+    cells_.clear();
+    cells_.reserve(points.size() / 4 + 1);
+    for (std::size_t i = 0; i < points.size(); ++i)
+      cells_[key(points[i])].push_back(static_cast<int>(i));
   }
-  /** \brief The value stored for `key`, or -1. */
-  int find(std::int64_t key) const {
-    if (keys_.empty()) return -1;
-    for (std::size_t i = slot(key);; i = (i + 1) & mask_) {
-      if (keys_[i] == key) return values_[i];
-      if (keys_[i] == kEmpty) return -1;
-    }
-  }
-  /** \brief Stores `value` for `key` unless the key is present; returns the stored value. */
-  int insert(std::int64_t key, int value) {
-    if (keys_.empty() || 2 * (size_ + 1) > keys_.size()) grow();
-    for (std::size_t i = slot(key);; i = (i + 1) & mask_) {
-      if (keys_[i] == key) return values_[i];
-      if (keys_[i] == kEmpty) {
-        keys_[i] = key;
-        values_[i] = value;
-        ++size_;
-        return value;
+  /** \brief Index of the nearest point within `max_dist` (<= the cell size), or -1. */
+  int nearest(const Eigen::Vector3f& q, float max_dist, float& best_d2) const {
+    best_d2 = max_dist * max_dist;
+    int best = -1;
+    forNeighbourCells(q, [&](const std::vector<int>& ids) {
+      for (int i : ids) {
+        const float d2 = ((*points_)[i] - q).squaredNorm();
+        if (d2 <= best_d2) {
+          best_d2 = d2;
+          best = i;
+        }
       }
-    }
+    });
+    return best;
   }
-  std::size_t size() const { return size_; }
-
-  /** \brief Packs integer voxel coordinates, 21 bits each (+-1M voxels: +-1000 km at 1 m). */
-  static std::int64_t pack(std::int64_t x, std::int64_t y, std::int64_t z) {
-    return ((x & 0x1FFFFF) << 42) | ((y & 0x1FFFFF) << 21) | (z & 0x1FFFFF);
+  /** \brief Indices of the points within `radius` (<= the cell size). */
+  void radius(const Eigen::Vector3f& q, float radius, std::vector<int>& out) const {
+    out.clear();
+    const float r2 = radius * radius;
+    forNeighbourCells(q, [&](const std::vector<int>& ids) {
+      for (int i : ids)
+        if (((*points_)[i] - q).squaredNorm() <= r2) out.push_back(i);
+    });
   }
 
  private:
-  std::size_t slot(std::int64_t key) const {
-    // Fibonacci hashing: the packed keys of neighbouring voxels differ in few, low bits.
-    return static_cast<std::size_t>((static_cast<std::uint64_t>(key) * 0x9E3779B97F4A7C15ull) >>
-                                    17) &
-           mask_;
+  static std::int64_t pack(std::int64_t x, std::int64_t y, std::int64_t z) {
+    // 21 bits per axis: +-1M cells, i.e. +-500 km at 0.5 m.
+    return ((x & 0x1FFFFF) << 42) | ((y & 0x1FFFFF) << 21) | (z & 0x1FFFFF);
   }
-  void grow() {
-    std::vector<std::int64_t> keys;
-    std::vector<int> values;
-    keys.swap(keys_);
-    values.swap(values_);
-    clear(std::max<std::size_t>(16, keys.size()));
-    for (std::size_t i = 0; i < keys.size(); ++i)
-      if (keys[i] != kEmpty) insert(keys[i], values[i]);
+  std::int64_t key(const Eigen::Vector3f& p) const {
+    return pack(static_cast<std::int64_t>(std::floor(p.x() / cell_)),
+                static_cast<std::int64_t>(std::floor(p.y() / cell_)),
+                static_cast<std::int64_t>(std::floor(p.z() / cell_)));
+  }
+  template <typename F>
+  void forNeighbourCells(const Eigen::Vector3f& q, F&& f) const {
+    const std::int64_t cx = static_cast<std::int64_t>(std::floor(q.x() / cell_)),
+                       cy = static_cast<std::int64_t>(std::floor(q.y() / cell_)),
+                       cz = static_cast<std::int64_t>(std::floor(q.z() / cell_));
+    for (std::int64_t dx = -1; dx <= 1; ++dx)
+      for (std::int64_t dy = -1; dy <= 1; ++dy)
+        for (std::int64_t dz = -1; dz <= 1; ++dz) {
+          const auto it = cells_.find(pack(cx + dx, cy + dy, cz + dz));
+          if (it != cells_.end()) f(it->second);
+        }
   }
 
-  std::vector<std::int64_t> keys_;
-  std::vector<int> values_;
-  std::size_t mask_ = 0;
-  std::size_t size_ = 0;
-};
-
-/** \brief Zeroth, first and second moments of the points in a voxel: enough to add and remove
- * whole scans from a map exactly, and to fit a plane at any time. */
-struct VoxelMoments {
-  double n = 0;
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  Eigen::Matrix3d outer = Eigen::Matrix3d::Zero();  ///< sum of p p^T
+  const std::vector<Eigen::Vector3f>* points_ = nullptr;
+  float cell_ = 1.f;
+  std::unordered_map<std::int64_t, std::vector<int>> cells_;
 };
 
 }  // namespace detail
@@ -99,24 +89,18 @@ struct VoxelMoments {
  * an INS (no poses.txt, no VIEWPOINT). The paper had an INS; this replaces it by LiDAR odometry.
  *
  * Each scan is cropped to [`getMinRange()`, `getMaxRange()`] (the near cut removes the ego
- * vehicle, the far cut sparse returns) and summarised in one pass by the moments (count, mean,
- * scatter) of its points in cubic voxels of `getVoxelSize()`. The voxel means are the points
- * registered; the map is the sum of the voxel moments of the last `getLocalMapSize()` keyframes
- * in world coordinates, from which every map voxel gets a plane (mean and normal, kept only where
- * the points are planar). Registration is point-to-plane ICP of the scan's voxel means against
- * those planes: a coarse phase (nearest plane among the 27 surrounding voxels, wide gate, no
- * trimming) and a fine phase (the plane of the voxel a point falls in: one table lookup). Adding
- * and dropping keyframes adds and subtracts their moments, so the map follows the sensor at the
- * cost of one scan's voxels, and nothing is searched in a tree. Registering to several past
- * scans instead of only the previous one keeps the error from growing with every frame while the
- * vehicle crawls. The initial guess is a constant-velocity prediction.
+ * vehicle, the far cut sparse returns), downsampled with a voxel grid of `getVoxelSize()`, given
+ * normals from its own neighbourhood, and registered to a **local map** — the last
+ * `getLocalMapSize()` keyframes in world coordinates — with point-to-plane ICP, first coarse
+ * (wide gate, no trimming) and then fine. Registering to
+ * several past scans instead of only the previous one keeps the error from growing with every
+ * frame while the vehicle crawls. The initial guess is a constant-velocity prediction.
  *
  * Robustness to movers (the very objects this library looks for) comes from three things:
- * correspondences with a point-to-plane residual above `getMaxCorrespondenceDistance()` are
- * dropped, the worst `1 - getTrimRatio()` of the remaining residuals are ignored in every fine
- * iteration (trimmed ICP), and the rest are weighted with a Cauchy kernel of scale
- * `getKernelScale()`. Moving objects are a small part of a street scene, so they end up in the
- * trimmed tail.
+ * correspondences further than `getMaxCorrespondenceDistance()` are dropped, the worst
+ * `1 - getTrimRatio()` of the remaining residuals are ignored in every iteration (trimmed ICP),
+ * and the rest are weighted with a Cauchy kernel of scale `getKernelScale()`. Moving objects are a
+ * small part of a street scene, so they end up in the trimmed tail.
  *
  * With `setPlanarMotion(true)` only x, y and yaw are estimated (z, roll and pitch keep their
  * predicted values), which suits vehicles on flat ground and removes the weakly observed degrees
@@ -136,17 +120,14 @@ class EgoMotionEstimator {
 
   /** \brief Registers the next scan (sensor frame) and returns its sensor→world pose. The first
    * scan after construction or reset() defines the world frame (identity). A scan with too few
-   * usable points in range keeps the constant-velocity prediction (and getLastCorrespondences()
-   * reports 0) rather than failing the whole sequence.
-   * \throws pcl_movers::InputError if the scan has no finite point at all (empty or all NaN):
-   * that is a broken input, not a hard scene; the estimator's state is left unchanged. */
+   * usable points keeps the constant-velocity prediction (and getLastFitness() reports 0
+   * correspondences) rather than failing the whole sequence. */
   Eigen::Isometry3d estimate(const PointCloud& scan);
 
   /** \brief Forgets the map and the motion; the next scan becomes the world origin. */
   void reset();
 
-  /** \brief Edge of the voxels in which scans are summarised and map planes fitted [m]
-   * (default 1.0). */
+  /** \brief Voxel grid leaf of the registered scans [m] (default 0.5). */
   void setVoxelSize(float size) { voxel_size_ = size; }
   float getVoxelSize() const { return voxel_size_; }
 
@@ -158,9 +139,8 @@ class EgoMotionEstimator {
   void setMaxRange(float range) { max_range_ = range; }
   float getMaxRange() const { return max_range_; }
 
-  /** \brief Largest point-to-plane residual (and, in the coarse phase, point to plane-centre
-   * distance) of a correspondence [m] (default 1.5); the fine phase shrinks it to a third of
-   * this over its iterations. */
+  /** \brief Largest point-to-map distance of a correspondence in the first iteration [m]
+   * (default 1.5); it shrinks to a third of this over the iterations. */
   void setMaxCorrespondenceDistance(float distance) { max_correspondence_distance_ = distance; }
   float getMaxCorrespondenceDistance() const { return max_correspondence_distance_; }
 
@@ -172,13 +152,12 @@ class EgoMotionEstimator {
   void setKernelScale(float scale) { kernel_scale_ = scale; }
   float getKernelScale() const { return kernel_scale_; }
 
-  /** \brief Most voxel means registered per frame in the fine phase; more are strided down to
-   * this (default 4000, 0 = all). The coarse phase uses a quarter of them. */
+  /** \brief Most scan points registered per frame; the downsampled scan is strided down to this
+   * (default 4000, 0 = all). */
   void setMaxSourcePoints(int n) { max_source_points_ = n; }
   int getMaxSourcePoints() const { return max_source_points_; }
 
-  /** \brief Most ICP iterations per scan, coarse and fine phases together (default 30); both
-   * phases end early once an update is below getTransformationEpsilon(). */
+  /** \brief ICP iterations per scan, split between a coarse and a fine phase (default 30). */
   void setMaximumIterations(int iterations) { max_iterations_ = iterations; }
   int getMaximumIterations() const { return max_iterations_; }
 
@@ -213,8 +192,7 @@ class EgoMotionEstimator {
   void setVerticalGroundNormals(bool enabled) { vertical_ground_normals_ = enabled; }
   bool getVerticalGroundNormals() const { return vertical_ground_normals_; }
 
-  /** \brief Fewest points a voxel needs to be registered (scan) or to get a plane (map)
-   * (default 5: a plane from fewer is mostly noise). */
+  /** \brief Neighbours used for each point's normal (default 10). */
   void setNormalNeighbours(int k) { normal_neighbours_ = k; }
   int getNormalNeighbours() const { return normal_neighbours_; }
 
@@ -230,40 +208,23 @@ class EgoMotionEstimator {
   std::size_t getFrameCount() const { return frames_; }
 
  protected:
-  /** \brief A scan voxel, sensor frame: moments, and the point registered (one of its points
-   * drawn at random). */
-  struct ScanVoxel {
-    detail::VoxelMoments moments;
-    Eigen::Vector3f sample = Eigen::Vector3f::Zero();
-  };
-  /** \brief A map voxel: summed moments of the keyframes and the plane fitted to them. */
-  struct MapVoxel {
-    detail::VoxelMoments moments;
-    Eigen::Vector3f mean = Eigen::Vector3f::Zero();
-    Eigen::Vector3f normal = Eigen::Vector3f::Zero();  ///< plane normal, or line direction
-    bool planar = false;                               ///< has a usable plane or line
-    bool linear = false;  ///< a line (pole, trunk), matched point-to-line
-    bool dirty = true;    ///< moments changed since the plane was fitted
-  };
-  /** \brief What one keyframe added to the map (world frame), to subtract it again. */
+  /** \brief A downsampled scan with per-point unit normals (NaN normal = not planar enough). */
   struct Keyframe {
-    std::vector<std::int64_t> keys;
-    std::vector<detail::VoxelMoments> moments;
+    std::vector<Eigen::Vector3f> points;   ///< world frame
+    std::vector<Eigen::Vector3f> normals;  ///< world frame
   };
 
-  /** \brief Crops the scan and fills scan_voxels_ (sensor frame); returns the finite points. */
-  std::size_t summarise(const PointCloud& scan);
-  /** \brief Point-to-plane ICP of the scan voxel means against the map, starting from `pose`. */
-  bool registerToMap(Eigen::Isometry3d& pose);
-  /** \brief Adds the scan's voxels at `pose` to the map, dropping the oldest keyframe if the map
-   * is full. */
-  void addKeyframe(const Eigen::Isometry3d& pose);
-  /** \brief The map voxel with a valid plane for `key`, or null; fits the plane if stale. */
-  const MapVoxel* plane(std::int64_t key);
-  /** \brief Voxel key of a point at `voxel_size_`. */
-  std::int64_t keyOf(const Eigen::Vector3f& p, Eigen::Vector3i* cell = nullptr) const;
+  /** \brief Crop and downsample; in the sensor frame. */
+  void preprocess(const PointCloud& scan, std::vector<Eigen::Vector3f>& points) const;
+  /** \brief Unit normals by PCA of each point's neighbours (NaN where not planar). */
+  void computeNormals(const std::vector<Eigen::Vector3f>& points,
+                      std::vector<Eigen::Vector3f>& normals) const;
+  /** \brief Point-to-plane ICP of `points` against the map, starting from `pose`. */
+  bool registerToMap(const std::vector<Eigen::Vector3f>& points, Eigen::Isometry3d& pose);
+  /** \brief Appends a keyframe and rebuilds the map's search tree. */
+  void addKeyframe(const std::vector<Eigen::Vector3f>& points, const Eigen::Isometry3d& pose);
 
-  float voxel_size_ = 1.0f;
+  float voxel_size_ = 0.5f;
   float min_range_ = 3.0f;
   float max_range_ = 60.0f;
   float max_correspondence_distance_ = 1.5f;
@@ -277,14 +238,13 @@ class EgoMotionEstimator {
   double keyframe_angle_ = 5.0 * M_PI / 180.0;
   bool planar_motion_ = false;
   bool constant_velocity_ = true;
-  int normal_neighbours_ = 5;
+  int normal_neighbours_ = 10;
   bool vertical_ground_normals_ = false;
 
-  std::vector<ScanVoxel> scan_voxels_;  ///< the current scan, sensor frame
-  detail::VoxelHashIndex scan_index_;
   std::deque<Keyframe> keyframes_;
-  std::vector<MapVoxel> map_voxels_;  ///< world frame; empty voxels stay until compaction
-  detail::VoxelHashIndex map_index_;
+  std::vector<Eigen::Vector3f> map_points_;   ///< world frame, one per voxel
+  std::vector<Eigen::Vector3f> map_normals_;  ///< world frame
+  detail::PointHashGrid map_grid_;
   Eigen::Isometry3d pose_ = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d motion_ = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d keyframe_pose_ = Eigen::Isometry3d::Identity();
