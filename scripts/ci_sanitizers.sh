@@ -64,11 +64,16 @@ stamp "build"
 
 echo "== ctest under ASan+UBSan"
 CTEST=(ctest --test-dir "$BUILD" --output-on-failure -j"$JOBS" --timeout 900)
+XVFB=()
 if [ -z "${DISPLAY:-}" ] && command -v xvfb-run >/dev/null; then
-  xvfb-run -a -s "-screen 0 1280x1024x24" "${CTEST[@]}"
-else
-  "${CTEST[@]}"
+  XVFB=(xvfb-run -a -s "-screen 0 1280x1024x24")
 fi
+"${XVFB[@]}" "${CTEST[@]}" -E '^ViewerTool\.'
+# The viewer tests run pcl_movers_viewer, which loads the Mesa GL driver under Xvfb. That driver
+# leaves ~112 bytes allocated at exit from a module it has already unloaded (LSan reports
+# "<unknown module>", so no suppression file can name it). Leak detection is therefore off for
+# these four tests only; every ASan memory-error check and UBSan stay on.
+ASAN_OPTIONS="${ASAN_OPTIONS/detect_leaks=1/detect_leaks=0}" "${XVFB[@]}" "${CTEST[@]}" -R '^ViewerTool\.'
 stamp "ctest"
 
 echo "== simulate + detect on data/scenarios/sample.yaml under ASan+UBSan"
