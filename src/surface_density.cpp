@@ -38,30 +38,31 @@ struct AxisWeights {
 
 void axisWeights(float mean, float sigma, float origin, float cell, int n, AxisWeights& out) {
   out.w.clear();
+  out.first = 0;
   const float u = (mean - origin) / cell;  // position in cells
   const float reach = 3.f * sigma / cell;
-  const int lo = static_cast<int>(std::floor(u - reach));
-  const int hi = static_cast<int>(std::floor(u + reach));
+  // The window bounds stay in float until they are known to overlap the grid: a point far away
+  // (or a huge σ) gives bounds no int can hold (found by fuzz_pcd_pipeline).
+  const float lo = std::floor(u - reach);
+  const float hi = std::floor(u + reach);
+  if (!std::isfinite(lo) || !std::isfinite(hi) || hi < 0.f || lo > static_cast<float>(n - 1))
+    return;
   const float inv = 1.f / (std::sqrt(2.f) * sigma);
-  float total = 0.f;
-  float prev = fastErf((lo * cell + origin - mean) * inv);
-  // Weights of the whole window first, to normalise; then keep the part inside [0, n).
-  thread_local std::vector<float> window;
-  window.resize(static_cast<std::size_t>(hi - lo + 1));
-  for (int i = lo; i <= hi; ++i) {
+  // Mass of the whole window, to normalise: the per-cell weights are differences of erf, so their
+  // sum telescopes to the two window ends, and only the cells inside [0, n) need evaluating.
+  const float total = 0.5f * (fastErf(((hi + 1.f) * cell + origin - mean) * inv) -
+                              fastErf((lo * cell + origin - mean) * inv));
+  const int first = static_cast<int>(std::max(lo, 0.f));
+  const int last = static_cast<int>(std::min(hi, static_cast<float>(n - 1)));
+  out.first = first;
+  if (last < first || !(total > 0.f)) return;
+  out.w.resize(static_cast<std::size_t>(last - first + 1));
+  float prev = fastErf((first * cell + origin - mean) * inv);
+  for (int i = first; i <= last; ++i) {
     const float next = fastErf(((i + 1) * cell + origin - mean) * inv);
-    const float wi = 0.5f * (next - prev);
-    window[static_cast<std::size_t>(i - lo)] = wi;
-    total += wi;
+    out.w[static_cast<std::size_t>(i - first)] = 0.5f * (next - prev) / total;
     prev = next;
   }
-  const int first = std::max(lo, 0);
-  const int last = std::min(hi, n - 1);
-  out.first = first;
-  if (last < first || total <= 0.f) return;
-  out.w.resize(static_cast<std::size_t>(last - first + 1));
-  for (int i = first; i <= last; ++i)
-    out.w[static_cast<std::size_t>(i - first)] = window[static_cast<std::size_t>(i - lo)] / total;
 }
 
 }  // namespace
@@ -200,6 +201,9 @@ SurfaceDensity SurfaceDensity::shifted(const Eigen::Vector3f& offset) const {
   // the (up to) 8 cells around its moved position, so mass is conserved inside the grid.
   const float sx = offset.x() / resolution_, sy = offset.y() / resolution_,
               sz = offset.z() / resolution_z_;
+  // A shift of more than the grid moves everything out (and would overflow the casts below).
+  if (!(std::abs(sx) < nx_ + 1.f && std::abs(sy) < ny_ + 1.f && std::abs(sz) < nz_ + 1.f))
+    return out;
   const int bx = static_cast<int>(std::floor(sx)), by = static_cast<int>(std::floor(sy)),
             bz = static_cast<int>(std::floor(sz));
   const float fx = sx - bx, fy = sy - by, fz = sz - bz;

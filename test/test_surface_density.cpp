@@ -192,3 +192,24 @@ TEST(SurfaceDensity, RevisionFollowsTheContent) {
   EXPECT_NE(d.revision(), r1);
   EXPECT_NE(d.shifted(Eigen::Vector3f(0.1f, 0.f, 0.f)).revision(), copy.revision());
 }
+
+// Regression (fuzz_pcd_pipeline, test/fuzz/corpus_pcd/regression_surface_density_huge_window.pcd):
+// a point ~1e16 m from the sensor has a σ whose ±3σ window no int can index, and a huge shift
+// overflowed the cell offset. Both must simply leave no mass in the grid, without UB or a huge
+// allocation, while a normal point beside them keeps its full mass.
+TEST(SurfaceDensity, FarPointsAndHugeShiftsLeaveNoMassWithoutOverflow) {
+  SurfaceDensity d;
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  cloud.push_back(pcl::PointXYZ(4e16f, -3e16f, 1e15f));
+  d.compute(cloud, Eigen::Vector3f::Zero(), Eigen::Vector3f(10.f, 0.f, 0.f));
+  EXPECT_TRUE(d.empty());
+  cloud.push_back(pcl::PointXYZ(10.f, 0.f, 0.f));
+  d.compute(cloud, Eigen::Vector3f::Zero(), Eigen::Vector3f(10.f, 0.f, 0.f));
+  EXPECT_NEAR(d.totalMass(), 0.5f, 1e-3f);  // one of the two Gaussians (mass 1/2 each) is inside
+  const SurfaceDensity far = d.shifted(Eigen::Vector3f(3e16f, 0.f, 0.f));
+  EXPECT_TRUE(far.empty());
+  const SurfaceDensity nan_shift =
+      d.shifted(Eigen::Vector3f(std::numeric_limits<float>::quiet_NaN(), 0.f, 0.f));
+  EXPECT_TRUE(nan_shift.empty());
+  EXPECT_NEAR(d.shifted(Eigen::Vector3f(0.2f, 0.f, 0.f)).totalMass(), 0.5f, 1e-3f);
+}
