@@ -179,6 +179,16 @@ TEST(SequenceIO, BadInputsNameTheFileAndReason) {
               io::readScan((dir.path() / "noxyz.pcd").string(), cloud);
             }).find("no 'x' field"),
             std::string::npos);
+  // A header line missing its value: PCL's parser throws std::out_of_range from vector::at(),
+  // which must come out as an InputError naming the file (fuzz_pcd_pipeline finding,
+  // test/fuzz/corpus_pcd/regression_pcd_header_out_of_range.pcd).
+  writeText(dir.path() / "nodata.pcd",
+            "VERSION .7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 1\nHEIGHT 1\n"
+            "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 1\nDATA\nascii\n1 2 3\n");
+  EXPECT_NE(expectInputError([&] {
+              io::readScan((dir.path() / "nodata.pcd").string(), cloud);
+            }).find("nodata.pcd"),
+            std::string::npos);
   // Truncated .bin.
   writeText(dir.path() / "cut.bin", "0123456789");
   EXPECT_NE(expectInputError([&] {

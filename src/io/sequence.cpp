@@ -60,8 +60,16 @@ void readPcdHeader(const std::string& path, pcl::PCLPointCloud2& header, Eigen::
   pcl::PCDReader reader;
   int version = 0, data_type = 0;
   unsigned int data_idx = 0;
-  if (reader.readHeader(path, header, origin, orientation, version, data_type, data_idx) < 0)
-    throw InputError(path, 0, "not a readable PCD file (bad or missing header)");
+  int status = -1;
+  try {
+    status = reader.readHeader(path, header, origin, orientation, version, data_type, data_idx);
+  } catch (const std::exception& e) {
+    // PCL's header parser indexes its tokens with vector::at(), so a malformed line (e.g. fewer
+    // SIZE entries than FIELDS) escapes as std::out_of_range (found by fuzz_pcd_pipeline).
+    throw InputError(path, 0,
+                     std::string("not a readable PCD file (malformed header: ") + e.what() + ")");
+  }
+  if (status < 0) throw InputError(path, 0, "not a readable PCD file (bad or missing header)");
 }
 
 bool hasField(const pcl::PCLPointCloud2& cloud, const char* name) {
