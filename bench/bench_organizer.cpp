@@ -4,6 +4,7 @@
  *
  *   bench_organizer               Google Benchmark timings on frame 0
  *   bench_organizer --report      one Markdown section over all frames (scripts/bench_organizer.sh)
+ *   bench_organizer --speed N     only the side-by-side speed comparison, N times
  *
  * SPDX-License-Identifier: BSD-3-Clause
  */
@@ -22,6 +23,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <ctime>
 #include <filesystem>
@@ -201,6 +203,77 @@ void score(const Cloud& cloud, const std::vector<int>& beams,
     if (!(model.elevations()[r] > model.elevations()[r + 1])) q.rows_ordered = false;
 }
 
+struct Speed {
+  double ours, theirs, ours_xyz, theirs_xyz;  ///< median thread CPU time per frame [ms]
+};
+
+/** Both methods on the same cloud, alternating, one frame after the other; the second of two
+ * passes over all frames is kept (the first warms caches and the allocator). */
+Speed measureSpeed(const std::vector<Cloud::Ptr>& clouds, int width) {
+  pcl_movers::RangeImageOrganizer<pcl::PointXYZI> organizer;
+  organizer.setSensorModel(pcl_movers::SensorModel::hdl64());
+  std::vector<double> ours_ms, pcl_ms;
+  Cloud out;
+  pcl::RangeImage image;
+  for (int pass = 0; pass < 2; ++pass)
+    for (std::size_t f = 0; f < clouds.size(); ++f) {
+      organizer.setInputCloud(clouds[f]);
+      const double a = millis([&] { organizer.organize(out); });
+      const double b = millis([&] { pclRangeImage(*clouds[f], width, image); });
+      if (pass == 1) {
+        ours_ms.push_back(a);
+        pcl_ms.push_back(b);
+      }
+    }
+  // The same with PointXYZ (16-byte points: half the image to write).
+  std::vector<double> ours_xyz_ms, pcl_xyz_ms;
+  std::vector<pcl::PointCloud<pcl::PointXYZ>::Ptr> xyz;
+  for (const auto& c : clouds) {
+    xyz.emplace_back(new pcl::PointCloud<pcl::PointXYZ>);
+    pcl::copyPointCloud(*c, *xyz.back());
+  }
+  pcl_movers::RangeImageOrganizer<pcl::PointXYZ> o;
+  o.setSensorModel(pcl_movers::SensorModel::hdl64());
+  pcl::PointCloud<pcl::PointXYZ> out_xyz;
+  for (int pass = 0; pass < 2; ++pass)
+    for (std::size_t f = 0; f < xyz.size(); ++f) {
+      o.setInputCloud(xyz[f]);
+      const double a = millis([&] { o.organize(out_xyz); });
+      const double b = millis([&] {
+        image.createFromPointCloud(*xyz[f], float(2 * M_PI) / float(width),
+                                   pcl::deg2rad(27.f / 64.f), pcl::deg2rad(360.f),
+                                   pcl::deg2rad(60.f), Eigen::Affine3f::Identity(),
+                                   pcl::RangeImage::LASER_FRAME, 0.f, 0.f, 0);
+      });
+      if (pass == 1) {
+        ours_xyz_ms.push_back(a);
+        pcl_xyz_ms.push_back(b);
+      }
+    }
+  return {median(ours_ms), median(pcl_ms), median(ours_xyz_ms), median(pcl_xyz_ms)};
+}
+
+/** Only the speed comparison, `repeats` times (quick side-by-side checks while optimizing). */
+int speedOnly(int repeats) {
+  const auto paths = framePaths();
+  if (paths.empty()) {
+    std::printf("KITTI data not found (%s)\n", kSequence.c_str());
+    return 1;
+  }
+  std::vector<Cloud::Ptr> clouds;
+  for (const auto& path : paths) clouds.push_back(load(path));
+  const int width = pcl_movers::SensorModel::hdl64().columns();
+  for (int r = 0; r < repeats; ++r) {
+    const Speed s = measureSpeed(clouds, width);
+    std::printf(
+        "PointXYZI: organizer %.2f ms, pcl::RangeImage %.2f ms, %.1fx | PointXYZ: %.2f ms, %.2f "
+        "ms, %.1fx\n",
+        s.ours, s.theirs, s.theirs / s.ours, s.ours_xyz, s.theirs_xyz, s.theirs_xyz / s.ours_xyz);
+    std::fflush(stdout);
+  }
+  return 0;
+}
+
 int report() {
   const auto paths = framePaths();
   if (paths.empty()) {
@@ -275,49 +348,9 @@ int report() {
     if (model.rows() == 64) score(*clouds[f], beams[f], o, estimated_quality, false);
   }
 
-  // Speed: both methods on the same cloud, alternating, one frame after the other.
-  std::vector<double> ours_ms, pcl_ms;
-  Cloud out;
-  pcl::RangeImage image;
-  for (int pass = 0; pass < 2; ++pass)
-    for (std::size_t f = 0; f < clouds.size(); ++f) {
-      organizer.setInputCloud(clouds[f]);
-      const double a = millis([&] { organizer.organize(out); });
-      const double b = millis([&] { pclRangeImage(*clouds[f], int(width), image); });
-      if (pass == 1) {  // the first pass warms caches and the allocator
-        ours_ms.push_back(a);
-        pcl_ms.push_back(b);
-      }
-    }
-  const double ours = median(ours_ms), theirs = median(pcl_ms);
-  // The same with PointXYZ (16-byte points: half the image to write).
-  std::vector<double> ours_xyz_ms, pcl_xyz_ms;
-  {
-    std::vector<pcl::PointCloud<pcl::PointXYZ>::Ptr> xyz;
-    for (const auto& c : clouds) {
-      xyz.emplace_back(new pcl::PointCloud<pcl::PointXYZ>);
-      pcl::copyPointCloud(*c, *xyz.back());
-    }
-    pcl_movers::RangeImageOrganizer<pcl::PointXYZ> o;
-    o.setSensorModel(hdl64);
-    pcl::PointCloud<pcl::PointXYZ> out_xyz;
-    for (int pass = 0; pass < 2; ++pass)
-      for (std::size_t f = 0; f < xyz.size(); ++f) {
-        o.setInputCloud(xyz[f]);
-        const double a = millis([&] { o.organize(out_xyz); });
-        const double b = millis([&] {
-          image.createFromPointCloud(*xyz[f], float(2 * M_PI) / float(width),
-                                     pcl::deg2rad(27.f / 64.f), pcl::deg2rad(360.f),
-                                     pcl::deg2rad(60.f), Eigen::Affine3f::Identity(),
-                                     pcl::RangeImage::LASER_FRAME, 0.f, 0.f, 0);
-        });
-        if (pass == 1) {
-          ours_xyz_ms.push_back(a);
-          pcl_xyz_ms.push_back(b);
-        }
-      }
-  }
-  const double ours_xyz = median(ours_xyz_ms), theirs_xyz = median(pcl_xyz_ms);
+  const Speed speed = measureSpeed(clouds, int(width));
+  const double ours = speed.ours, theirs = speed.theirs;
+  const double ours_xyz = speed.ours_xyz, theirs_xyz = speed.theirs_xyz;
 
   // estimate() on every frame of the other KITTI sets (odometry and object are raw .bin scans).
   struct SetResult {
@@ -431,6 +464,8 @@ int report() {
 int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i)
     if (std::strcmp(argv[i], "--report") == 0) return report();
+  for (int i = 1; i + 1 < argc; ++i)
+    if (std::strcmp(argv[i], "--speed") == 0) return speedOnly(std::atoi(argv[i + 1]));
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::RunSpecifiedBenchmarks();

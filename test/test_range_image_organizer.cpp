@@ -159,6 +159,13 @@ TEST(RangeImageOrganizer, CollisionsKeepTheNearerPointOrUseAFreeNeighbour) {
   EXPECT_EQ(lenient.getCellOfPoint()[0], row * columns + 100);
   EXPECT_EQ(lenient.getCellOfPoint()[1], row * columns + 99);   // the side its azimuth leans to
   EXPECT_EQ(lenient.getCellOfPoint()[2], row * columns + 101);  // then the other side
+
+  // The same organizer again without the neighbours: the losers' entries of the previous frame
+  // must not survive (the cell of each point is rewritten every frame, not refilled with -1).
+  lenient.setUseFreeNeighbour(false);
+  lenient.organize(out);
+  EXPECT_EQ(lenient.getCellOfPoint(), strict.getCellOfPoint());
+  EXPECT_EQ(lenient.getCellOfPoint()[2], -1);
 }
 
 TEST(RangeImageOrganizer, OrganizedInputPassesThrough) {

@@ -514,6 +514,7 @@ void RangeImageOrganizer<PointT>::placeBlock(std::size_t begin, std::size_t end)
   for (std::size_t k = 0; k < m; ++k) {
     const int index = indices ? (*indices_)[begin + k] : int(begin + k);
     if (status[k] != 0) {
+      cell_of_point[index] = -1;
       if (status[k] == 1)
         ++invalid_;
       else
@@ -559,6 +560,7 @@ void RangeImageOrganizer<PointT>::placeBlock(std::size_t begin, std::size_t end)
     }
     // The cell is taken: the nearer return wins, as in a single-return range image.
     ++displaced_;
+    cell_of_point[index] = -1;  // unless it wins the cell below
     const int occupant = index_image[cell];
     if (range2Of(index) < range2Of(occupant)) {
       cell_of_point[occupant] = -1;
@@ -632,7 +634,12 @@ void RangeImageOrganizer<PointT>::organize(PointCloud& output) {
   const std::size_t cells = std::size_t(rows) * std::size_t(columns);
   // All buffers below are members: same-size frames reuse them without allocating.
   index_image_.assign(cells, -1);
-  cell_of_point_.assign(input_->size(), -1);
+  // Without indices every point passes the placement loop, which writes its entry; with indices
+  // the points left out must read -1.
+  if (fake_indices_)
+    cell_of_point_.resize(input_->size());
+  else
+    cell_of_point_.assign(input_->size(), -1);
   for (auto* block : {&block_x_, &block_y_, &block_z_, &block_w_, &block_t_})
     block->resize(detail::kOrganizerBlock);
   for (auto* block : {&block_status_, &block_table_, &block_column_, &block_row_})
