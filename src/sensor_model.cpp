@@ -211,28 +211,42 @@ int nearestBeam(const std::vector<double>& a, const std::vector<double>& h, floa
   return row;
 }
 
-// Histogram of t (or t - h·w) shared by the steps of estimateBeams.
-constexpr double kBin = 0.0003, kTMin = -1.2, kTMax = 1.2;
-const int kBins = int((kTMax - kTMin) / kBin);
-constexpr int kOffsets = 81;
-double offsetOf(int j) {
-  return 0.01 * (j - kOffsets / 2);
-}
-// The offset is chosen per band of ~2° of t (the two blocks of an HDL-64E sit at different
-// heights). Measured on KITTI: 120 bins find all 64 beams to 0.006°; 90 and 180 bins miss the beam
-// next to the block boundary, whose band then mixes both blocks.
-constexpr int kBand = 120;
-/** A subsample is plenty for the histograms: a beam still gets hundreds of points. */
-std::size_t subsampleStride(std::size_t n) {
-  return std::max<std::size_t>(1, n / 40000);
-}
+}  // namespace
 
-/** Index (offsetOf) of the vertical offset of each band of kBand bins of t: the one whose
- * histogram of the band's points is most concentrated (largest sum of squares). */
-std::vector<int> bandOffsets(const std::vector<float>& w, const std::vector<float>& t,
-                             std::size_t stride) {
+SensorModel estimateBeams(const std::vector<float>& w, const std::vector<float>& t, int num_beams,
+                          int columns) {
   const std::size_t n = w.size();
-  const int bins = kBins;
+  if (n < 200)
+    throw InputError("SensorModel::estimate: only " + std::to_string(n) +
+                     " valid points beyond 2 m; need at least 200 to find the beams");
+  // Hough transform of the lines t = a + h·w: for each candidate offset h a histogram of t - h·w
+  // in bins of 0.0003 (~0.017° near the horizon). A beam makes a sharp peak at its own h and
+  // smeared ones elsewhere (near points shift by h/ρ), so h is chosen per elevation band below.
+  constexpr double kBin = 0.0003, kTMin = -1.2, kTMax = 1.2;
+  const int bins = int((kTMax - kTMin) / kBin);
+  // A subsample is plenty: a beam still gets hundreds of points.
+  const std::size_t stride = std::max<std::size_t>(1, n / 40000);
+  constexpr int kOffsets = 81;
+  auto offsetOf = [](int j) { return 0.01 * (j - kOffsets / 2); };
+  std::vector<double> raw(bins), accumulator(std::size_t(kOffsets) * bins, 0.0);
+  for (int j = 0; j < kOffsets; ++j) {
+    const double h = offsetOf(j);
+    std::fill(raw.begin(), raw.end(), 0.0);
+    for (std::size_t i = 0; i < n; i += stride) {
+      const int b = binOf(t[i] - h * w[i], kTMin, kBin, bins);
+      if (b >= 0 && b < bins) raw[b] += 1.0;
+    }
+    double* row = &accumulator[std::size_t(j) * bins];
+    for (int b = 2; b + 2 < bins; ++b)
+      row[b] = (raw[b - 2] + 2 * raw[b - 1] + 3 * raw[b] + 2 * raw[b + 1] + raw[b + 2]) / 9.0;
+  }
+  auto at = [&](int j, int b) { return accumulator[std::size_t(j) * bins + b]; };
+  // The offset is chosen per band of ~2° (the two blocks of an HDL-64E sit at different heights):
+  // the one whose histogram of the band's points is most concentrated (largest sum of squares).
+  // Measured on KITTI: 120 bins find all 64 beams to 0.006°; 90 and 180 bins miss the beam next to
+  // the block boundary, whose band then mixes both blocks.
+  constexpr int kBand = 120;
+  std::vector<double> best_offset(bins, 0.0);
   const int bands = (bins + kBand - 1) / kBand;
   std::vector<int> band_offset(bands, kOffsets / 2);
   std::vector<bool> confident(bands, false);
@@ -281,39 +295,11 @@ std::vector<int> bandOffsets(const std::vector<float>& w, const std::vector<floa
     }
     band_offset[band] = chosen >= 0 ? band_offset[chosen] : kOffsets / 2;
   }
-  return band_offset;
-}
-
-/** The layout from (w, t) pairs: the Hough transform, the peaks and the refit. */
-SensorModel estimateFromLines(const std::vector<float>& w, const std::vector<float>& t,
-                              int num_beams, int columns) {
-  const std::size_t n = w.size();
-  // Hough transform of the lines t = a + h·w: for each candidate offset h a histogram of t - h·w
-  // in bins of 0.0003 (~0.017° near the horizon). A beam makes a sharp peak at its own h and
-  // smeared ones elsewhere (near points shift by h/ρ), so h is chosen per elevation band
-  // (bandOffsets).
-  const int bins = kBins;
-  const std::size_t stride = subsampleStride(n);
-  std::vector<double> raw(bins), accumulator(std::size_t(kOffsets) * bins, 0.0);
-  for (int j = 0; j < kOffsets; ++j) {
-    const double h = offsetOf(j);
-    std::fill(raw.begin(), raw.end(), 0.0);
-    for (std::size_t i = 0; i < n; i += stride) {
-      const int b = binOf(t[i] - h * w[i], kTMin, kBin, bins);
-      if (b >= 0 && b < bins) raw[b] += 1.0;
-    }
-    double* row = &accumulator[std::size_t(j) * bins];
-    for (int b = 2; b + 2 < bins; ++b)
-      row[b] = (raw[b - 2] + 2 * raw[b - 1] + 3 * raw[b] + 2 * raw[b + 1] + raw[b + 2]) / 9.0;
-  }
-  auto at = [&](int j, int b) { return accumulator[std::size_t(j) * bins + b]; };
-  const std::vector<int> band_offset = bandOffsets(w, t, stride);
   double peak_max = 0.0;
   for (int b = 0; b < bins; ++b) peak_max = std::max(peak_max, at(band_offset[b / kBand], b));
   // A beam is a narrow peak; clutter is broad: a candidate must stand clearly above the histogram
   // a few bins away (real beams are >= 17 bins apart).
   constexpr int kShoulder = 6;
-  std::vector<double> best_offset(bins, 0.0);
   std::vector<std::pair<double, int>> candidates;  // (height, bin)
   for (int b = kShoulder; b + kShoulder < bins; ++b) {
     const int j = band_offset[b / kBand];
@@ -416,101 +402,6 @@ SensorModel estimateFromLines(const std::vector<float>& w, const std::vector<flo
                     "estimated");
   model.setVerticalOffsets(offsets);
   return model;
-}
-
-/** Sector of an azimuth [rad] among `sectors` equal ones over the full turn. */
-int sectorOf(float azimuth, int sectors) {
-  const double f = (double(azimuth) + M_PI) / (2 * M_PI) * sectors;
-  return f >= 0.0 && f < sectors ? int(f) : (f < 0.0 ? 0 : sectors - 1);
-}
-
-/** Radial displacement [m] of each azimuth sector (kScanSectors of them) that best lines the
- * sector's points up with the rest of the scan (see estimateBeams): the displacement d maps t to
- * t·(1 + d·w), the t the point had before it was moved by d along its ray. */
-constexpr int kScanSectors = 64;
-std::vector<double> sectorDisplacements(const std::vector<float>& w, const std::vector<float>& t,
-                                        const std::vector<float>& azimuth, std::size_t stride) {
-  const std::size_t n = w.size();
-  const int bins = kBins;
-  const std::vector<int> band_offset = bandOffsets(w, t, stride);
-  std::vector<std::vector<std::size_t>> members(kScanSectors);
-  std::vector<double> offset(n, 0.0);  // of the subsampled points only
-  for (std::size_t i = 0; i < n; i += stride) {
-    const int b = binOf(t[i], kTMin, kBin, bins);
-    if (b < 0) continue;
-    offset[i] = offsetOf(band_offset[b / kBand]);
-    members[sectorOf(azimuth[i], kScanSectors)].push_back(i);
-  }
-  // Displacements up to ±1.2 m in 2.5 cm steps (a car at 24 m/s moves 1.2 m in half a turn of a
-  // 10 Hz sensor), tried from 0 outwards: a sector whose points fit any displacement equally
-  // (e.g. all at one range) keeps 0.
-  constexpr int kSteps = 48;
-  constexpr double kStep = 0.025;
-  std::vector<double> displacement(kScanSectors, 0.0);
-  std::vector<double> raw(bins), reference(bins);
-  auto bin = [&](std::size_t i, double d) {
-    return binOf(double(t[i]) * (1.0 + d * w[i]) - offset[i] * w[i], kTMin, kBin, bins);
-  };
-  for (int iteration = 0; iteration < 2; ++iteration) {
-    // The reference: all points with the current displacements, smoothed like the Hough
-    // histograms.
-    std::fill(raw.begin(), raw.end(), 0.0);
-    for (int s = 0; s < kScanSectors; ++s)
-      for (const std::size_t i : members[s]) {
-        const int b = bin(i, displacement[s]);
-        if (b >= 0) raw[b] += 1.0;
-      }
-    for (int b = 2; b + 2 < bins; ++b)
-      reference[b] = (raw[b - 2] + 2 * raw[b - 1] + 3 * raw[b] + 2 * raw[b + 1] + raw[b + 2]) / 9.0;
-    std::vector<double> next(kScanSectors, 0.0);
-    for (int s = 0; s < kScanSectors; ++s) {
-      if (members[s].size() < 100) continue;
-      double best_score = -1.0;
-      for (int k = 0; k <= 2 * kSteps; ++k) {
-        const double d = kStep * ((k + 1) / 2) * (k % 2 ? 1 : -1);
-        double score = 0.0;
-        for (const std::size_t i : members[s]) {
-          const int b = bin(i, d);
-          if (b >= 0) score += reference[b];
-        }
-        if (score > best_score) {
-          best_score = score;
-          next[s] = d;
-        }
-      }
-    }
-    // A lone sector off its neighbours is noise; a step between two (the scan's seam) is kept.
-    for (int s = 0; s < kScanSectors; ++s) {
-      double v[3] = {next[(s + kScanSectors - 1) % kScanSectors], next[s],
-                     next[(s + 1) % kScanSectors]};
-      std::sort(v, v + 3);
-      displacement[s] = v[1];
-    }
-  }
-  return displacement;
-}
-
-}  // namespace
-
-SensorModel estimateBeams(const std::vector<float>& w, const std::vector<float>& t,
-                          const std::vector<float>& azimuth, int num_beams, int columns) {
-  const std::size_t n = w.size();
-  if (n < 200)
-    throw InputError("SensorModel::estimate: only " + std::to_string(n) +
-                     " valid points beyond 2 m; need at least 200 to find the beams");
-  // Scans corrected for the sensor's own motion during the turn (KITTI odometry's are) moved
-  // each point along the vehicle's path by the time between its firing and the scan's reference
-  // time: the two sides of the scan's seam (a full turn apart) moved in opposite directions, so
-  // a beam's ground ring behind the vehicle splits into two peaks (~0.2° apart at 8.6 m/s). The
-  // radial part of that displacement depends on the azimuth only: it is estimated per sector as
-  // the one that best lines the sector up with the rest of the scan, and undone before the beams
-  // are fitted. For scans without such a correction it comes out ~0.
-  const std::vector<double> displacement = sectorDisplacements(w, t, azimuth, subsampleStride(n));
-  std::vector<float> undone(t);
-  for (std::size_t i = 0; i < n; ++i)
-    undone[i] = float(double(t[i]) *
-                      (1.0 + displacement[sectorOf(azimuth[i], kScanSectors)] * double(w[i])));
-  return estimateFromLines(w, undone, num_beams, columns);
 }
 
 }  // namespace detail
