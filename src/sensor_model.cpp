@@ -211,42 +211,28 @@ int nearestBeam(const std::vector<double>& a, const std::vector<double>& h, floa
   return row;
 }
 
-}  // namespace
+// Histogram of t (or t - h·w) shared by the steps of estimateBeams.
+constexpr double kBin = 0.0003, kTMin = -1.2, kTMax = 1.2;
+const int kBins = int((kTMax - kTMin) / kBin);
+constexpr int kOffsets = 81;
+double offsetOf(int j) {
+  return 0.01 * (j - kOffsets / 2);
+}
+// The offset is chosen per band of ~2° of t (the two blocks of an HDL-64E sit at different
+// heights). Measured on KITTI: 120 bins find all 64 beams to 0.006°; 90 and 180 bins miss the beam
+// next to the block boundary, whose band then mixes both blocks.
+constexpr int kBand = 120;
+/** A subsample is plenty for the histograms: a beam still gets hundreds of points. */
+std::size_t subsampleStride(std::size_t n) {
+  return std::max<std::size_t>(1, n / 40000);
+}
 
-SensorModel estimateBeams(const std::vector<float>& w, const std::vector<float>& t, int num_beams,
-                          int columns) {
+/** Index (offsetOf) of the vertical offset of each band of kBand bins of t: the one whose
+ * histogram of the band's points is most concentrated (largest sum of squares). */
+std::vector<int> bandOffsets(const std::vector<float>& w, const std::vector<float>& t,
+                             std::size_t stride) {
   const std::size_t n = w.size();
-  if (n < 200)
-    throw InputError("SensorModel::estimate: only " + std::to_string(n) +
-                     " valid points beyond 2 m; need at least 200 to find the beams");
-  // Hough transform of the lines t = a + h·w: for each candidate offset h a histogram of t - h·w
-  // in bins of 0.0003 (~0.017° near the horizon). A beam makes a sharp peak at its own h and
-  // smeared ones elsewhere (near points shift by h/ρ), so h is chosen per elevation band below.
-  constexpr double kBin = 0.0003, kTMin = -1.2, kTMax = 1.2;
-  const int bins = int((kTMax - kTMin) / kBin);
-  // A subsample is plenty: a beam still gets hundreds of points.
-  const std::size_t stride = std::max<std::size_t>(1, n / 40000);
-  constexpr int kOffsets = 81;
-  auto offsetOf = [](int j) { return 0.01 * (j - kOffsets / 2); };
-  std::vector<double> raw(bins), accumulator(std::size_t(kOffsets) * bins, 0.0);
-  for (int j = 0; j < kOffsets; ++j) {
-    const double h = offsetOf(j);
-    std::fill(raw.begin(), raw.end(), 0.0);
-    for (std::size_t i = 0; i < n; i += stride) {
-      const int b = binOf(t[i] - h * w[i], kTMin, kBin, bins);
-      if (b >= 0 && b < bins) raw[b] += 1.0;
-    }
-    double* row = &accumulator[std::size_t(j) * bins];
-    for (int b = 2; b + 2 < bins; ++b)
-      row[b] = (raw[b - 2] + 2 * raw[b - 1] + 3 * raw[b] + 2 * raw[b + 1] + raw[b + 2]) / 9.0;
-  }
-  auto at = [&](int j, int b) { return accumulator[std::size_t(j) * bins + b]; };
-  // The offset is chosen per band of ~2° (the two blocks of an HDL-64E sit at different heights):
-  // the one whose histogram of the band's points is most concentrated (largest sum of squares).
-  // Measured on KITTI: 120 bins find all 64 beams to 0.006°; 90 and 180 bins miss the beam next to
-  // the block boundary, whose band then mixes both blocks.
-  constexpr int kBand = 120;
-  std::vector<double> best_offset(bins, 0.0);
+  const int bins = kBins;
   const int bands = (bins + kBand - 1) / kBand;
   std::vector<int> band_offset(bands, kOffsets / 2);
   std::vector<bool> confident(bands, false);
@@ -295,11 +281,39 @@ SensorModel estimateBeams(const std::vector<float>& w, const std::vector<float>&
     }
     band_offset[band] = chosen >= 0 ? band_offset[chosen] : kOffsets / 2;
   }
+  return band_offset;
+}
+
+/** The layout from (w, t) pairs: the Hough transform, the peaks and the refit. */
+SensorModel estimateFromLines(const std::vector<float>& w, const std::vector<float>& t,
+                              int num_beams, int columns) {
+  const std::size_t n = w.size();
+  // Hough transform of the lines t = a + h·w: for each candidate offset h a histogram of t - h·w
+  // in bins of 0.0003 (~0.017° near the horizon). A beam makes a sharp peak at its own h and
+  // smeared ones elsewhere (near points shift by h/ρ), so h is chosen per elevation band
+  // (bandOffsets).
+  const int bins = kBins;
+  const std::size_t stride = subsampleStride(n);
+  std::vector<double> raw(bins), accumulator(std::size_t(kOffsets) * bins, 0.0);
+  for (int j = 0; j < kOffsets; ++j) {
+    const double h = offsetOf(j);
+    std::fill(raw.begin(), raw.end(), 0.0);
+    for (std::size_t i = 0; i < n; i += stride) {
+      const int b = binOf(t[i] - h * w[i], kTMin, kBin, bins);
+      if (b >= 0 && b < bins) raw[b] += 1.0;
+    }
+    double* row = &accumulator[std::size_t(j) * bins];
+    for (int b = 2; b + 2 < bins; ++b)
+      row[b] = (raw[b - 2] + 2 * raw[b - 1] + 3 * raw[b] + 2 * raw[b + 1] + raw[b + 2]) / 9.0;
+  }
+  auto at = [&](int j, int b) { return accumulator[std::size_t(j) * bins + b]; };
+  const std::vector<int> band_offset = bandOffsets(w, t, stride);
   double peak_max = 0.0;
   for (int b = 0; b < bins; ++b) peak_max = std::max(peak_max, at(band_offset[b / kBand], b));
   // A beam is a narrow peak; clutter is broad: a candidate must stand clearly above the histogram
   // a few bins away (real beams are >= 17 bins apart).
   constexpr int kShoulder = 6;
+  std::vector<double> best_offset(bins, 0.0);
   std::vector<std::pair<double, int>> candidates;  // (height, bin)
   for (int b = kShoulder; b + kShoulder < bins; ++b) {
     const int j = band_offset[b / kBand];
@@ -402,6 +416,201 @@ SensorModel estimateBeams(const std::vector<float>& w, const std::vector<float>&
                     "estimated");
   model.setVerticalOffsets(offsets);
   return model;
+}
+
+/** Sector of an azimuth [rad] among `sectors` equal ones over the full turn. */
+int sectorOf(float azimuth, int sectors) {
+  const double f = (double(azimuth) + M_PI) / (2 * M_PI) * sectors;
+  return f >= 0.0 && f < sectors ? int(f) : (f < 0.0 ? 0 : sectors - 1);
+}
+
+/** A point moved by d [m] along its ray to w = 1/ρ was fired at ρ - d: its w and t = z/ρ were
+ * those divided by 1 - d·w (kept positive for the rare point nearer than d). */
+double unmoveScale(double d, double w) {
+  return std::max(0.2, 1.0 - d * w);
+}
+
+/** The radial displacement of a motion-corrected scan as a function of azimuth φ: a point fired a
+ * fraction u of the turn after the scan's seam was moved by the sensor's travel between its
+ * firing and the scan's reference time, (V·(u - u_ref))·(cos φ, sin φ) along its ray, i.e.
+ * (a·u + c)·cos φ + (b·u + d)·sin φ with the seam, a, b, c, d fitted to the sectors. */
+struct MotionDisplacement {
+  double seam = -M_PI, a = 0.0, b = 0.0, c = 0.0, d = 0.0;
+  bool isZero() const { return a == 0.0 && b == 0.0 && c == 0.0 && d == 0.0; }
+  double at(double phi) const {
+    double u = (phi - seam) / (2 * M_PI);
+    u -= std::floor(u);
+    return (a * u + c) * std::cos(phi) + (b * u + d) * std::sin(phi);
+  }
+};
+
+/** Least-squares fit of MotionDisplacement to the per-sector displacements, the seam at the
+ * sector boundary that fits best. */
+MotionDisplacement fitMotion(const std::vector<double>& sector) {
+  const int sectors = int(sector.size());
+  MotionDisplacement best;
+  double best_error = -1.0;
+  for (int k = 0; k < sectors; ++k) {
+    MotionDisplacement m;
+    m.seam = -M_PI + 2 * M_PI * k / sectors;
+    // Normal equations of the 4 linear parameters.
+    double A[4][5] = {};
+    for (int s = 0; s < sectors; ++s) {
+      const double phi = -M_PI + 2 * M_PI * (s + 0.5) / sectors;
+      double u = (phi - m.seam) / (2 * M_PI);
+      u -= std::floor(u);
+      const double f[4] = {u * std::cos(phi), u * std::sin(phi), std::cos(phi), std::sin(phi)};
+      for (int r = 0; r < 4; ++r) {
+        for (int q = 0; q < 4; ++q) A[r][q] += f[r] * f[q];
+        A[r][4] += f[r] * sector[s];
+      }
+    }
+    for (int r = 0; r < 4; ++r) A[r][r] += 1e-9;  // all-zero sectors: the zero solution
+    bool ok = true;
+    for (int r = 0; r < 4 && ok; ++r) {
+      int pivot = r;
+      for (int q = r + 1; q < 4; ++q)
+        if (std::abs(A[q][r]) > std::abs(A[pivot][r])) pivot = q;
+      std::swap(A[r], A[pivot]);
+      if (!(std::abs(A[r][r]) > 1e-12)) {
+        ok = false;
+        break;
+      }
+      for (int q = 0; q < 4; ++q) {
+        if (q == r) continue;
+        const double factor = A[q][r] / A[r][r];
+        for (int col = r; col < 5; ++col) A[q][col] -= factor * A[r][col];
+      }
+    }
+    if (!ok) continue;
+    m.a = A[0][4] / A[0][0];
+    m.b = A[1][4] / A[1][1];
+    m.c = A[2][4] / A[2][2];
+    m.d = A[3][4] / A[3][3];
+    double error = 0.0;
+    for (int s = 0; s < sectors; ++s) {
+      const double e = m.at(-M_PI + 2 * M_PI * (s + 0.5) / sectors) - sector[s];
+      error += e * e;
+    }
+    if (best_error < 0.0 || error < best_error) {
+      best_error = error;
+      best = m;
+    }
+  }
+  return best;
+}
+
+/** The radial displacement of a motion-corrected scan (see estimateBeams): per azimuth sector
+ * (kScanSectors of them) the displacement d along the rays (unmoveScale) that best lines the
+ * sector's points up with the rest of the scan, then MotionDisplacement fitted to the sectors; a
+ * few rounds, each against the scan corrected by the previous round's fit. */
+constexpr int kScanSectors = 32;
+MotionDisplacement scanMotion(const std::vector<float>& w, const std::vector<float>& t,
+                              const std::vector<float>& azimuth, std::size_t stride) {
+  const std::size_t n = w.size();
+  const int bins = kBins;
+  const std::vector<int> band_offset = bandOffsets(w, t, stride);
+  std::vector<std::vector<std::size_t>> members(kScanSectors);
+  std::vector<double> offset(n, 0.0);  // of the subsampled points only
+  for (std::size_t i = 0; i < n; i += stride) {
+    const int b = binOf(t[i], kTMin, kBin, bins);
+    if (b < 0) continue;
+    offset[i] = offsetOf(band_offset[b / kBand]);
+    members[sectorOf(azimuth[i], kScanSectors)].push_back(i);
+  }
+  // 600 points per sector are plenty to line it up (every k-th point, spread over the beams).
+  constexpr std::size_t kSectorPoints = 600;
+  for (auto& m : members)
+    if (m.size() > kSectorPoints) {
+      const std::size_t every = (m.size() + kSectorPoints - 1) / kSectorPoints;
+      std::size_t kept = 0;
+      for (std::size_t j = 0; j < m.size(); j += every) m[kept++] = m[j];
+      m.resize(kept);
+    }
+  MotionDisplacement motion;
+  std::vector<double> raw(bins), reference(bins);
+  auto bin = [&](std::size_t i, double d) {
+    return binOf((double(t[i]) - offset[i] * w[i]) / unmoveScale(d, w[i]), kTMin, kBin, bins);
+  };
+  constexpr int kRounds = 4;
+  for (int round = 0; round < kRounds; ++round) {
+    // The reference: all points with the current displacements, smoothed like the Hough
+    // histograms.
+    std::fill(raw.begin(), raw.end(), 0.0);
+    for (int s = 0; s < kScanSectors; ++s)
+      for (const std::size_t i : members[s]) {
+        const int b = bin(i, motion.at(azimuth[i]));
+        if (b >= 0) raw[b] += 1.0;
+      }
+    for (int b = 2; b + 2 < bins; ++b)
+      reference[b] = (raw[b - 2] + 2 * raw[b - 1] + 3 * raw[b] + 2 * raw[b + 1] + raw[b + 2]) / 9.0;
+    // First round: up to ±1.2 m in 5 cm steps (a car at 24 m/s moves 1.2 m in half a turn of a
+    // 10 Hz sensor); later rounds ±25 cm in 1.25 cm steps around the fit. Tried from the centre
+    // outwards: a sector whose points fit any displacement equally (e.g. all at one range) keeps
+    // the centre.
+    const int steps = round == 0 ? 24 : 20;
+    const double step = round == 0 ? 0.05 : 0.0125;
+    std::vector<double> sector(kScanSectors, 0.0);
+    for (int s = 0; s < kScanSectors; ++s) {
+      const double centre =
+          round == 0 ? 0.0 : motion.at(-M_PI + 2 * M_PI * (s + 0.5) / kScanSectors);
+      sector[s] = centre;
+      if (members[s].size() < 100) continue;  // keeps the centre
+      double best_score = -1.0;
+      for (int k = 0; k <= 2 * steps; ++k) {
+        const double d = centre + step * ((k + 1) / 2) * (k % 2 ? 1 : -1);
+        double score = 0.0;
+        for (const std::size_t i : members[s]) {
+          const int b = bin(i, d);
+          if (b >= 0) score += reference[b];
+        }
+        if (score > best_score) {
+          best_score = score;
+          sector[s] = d;
+        }
+      }
+    }
+    // A lone sector off its neighbours is noise; a step between two (the scan's seam) is kept.
+    std::vector<double> filtered(kScanSectors);
+    for (int s = 0; s < kScanSectors; ++s) {
+      double v[3] = {sector[(s + kScanSectors - 1) % kScanSectors], sector[s],
+                     sector[(s + 1) % kScanSectors]};
+      std::sort(v, v + 3);
+      filtered[s] = v[1];
+    }
+    motion = fitMotion(filtered);
+    // No sector moved: a scan without motion correction (or a sensor at rest), nothing to undo.
+    if (round == 0 &&
+        std::all_of(filtered.begin(), filtered.end(), [](double d) { return d == 0.0; }))
+      return MotionDisplacement();
+  }
+  return motion;
+}
+
+}  // namespace
+
+SensorModel estimateBeams(const std::vector<float>& w, const std::vector<float>& t,
+                          const std::vector<float>& azimuth, int num_beams, int columns) {
+  const std::size_t n = w.size();
+  if (n < 200)
+    throw InputError("SensorModel::estimate: only " + std::to_string(n) +
+                     " valid points beyond 2 m; need at least 200 to find the beams");
+  // Scans corrected for the sensor's own motion during the turn (KITTI odometry's are) moved
+  // each point along the vehicle's path by the time between its firing and the scan's reference
+  // time: the two sides of the scan's seam (a full turn apart) moved in opposite directions, so
+  // a beam's ground ring behind the vehicle splits into two peaks (~0.2° apart at 8.6 m/s). The
+  // radial part of that displacement depends on the azimuth only: it is estimated per sector as
+  // the one that best lines the sector up with the rest of the scan, and undone before the beams
+  // are fitted. For scans without such a correction it comes out ~0.
+  const MotionDisplacement motion = scanMotion(w, t, azimuth, subsampleStride(n));
+  if (motion.isZero()) return estimateFromLines(w, t, num_beams, columns);
+  std::vector<float> w_fired(n), t_fired(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double scale = unmoveScale(motion.at(azimuth[i]), w[i]);
+    w_fired[i] = float(w[i] / scale);
+    t_fired[i] = float(t[i] / scale);
+  }
+  return estimateFromLines(w_fired, t_fired, num_beams, columns);
 }
 
 }  // namespace detail
