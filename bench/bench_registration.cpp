@@ -49,6 +49,9 @@ struct Method {
   std::string name;
   std::string settings;
   std::function<pcl::Registration<pcl::PointXYZ, pcl::PointXYZ>::Ptr()> make;
+  /** Hand the pairs' occluder returns to BhattacharyaRegistration (setSourceOccluders() /
+   * setTargetOccluders()); the other methods have no such input. */
+  bool occluders = false;
 };
 
 pcl_movers::BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ>::Ptr makeBr(int yaws) {
@@ -99,6 +102,10 @@ std::vector<Method> methods() {
          r->setTransformationEpsilon(1e-3);
          return r;
        }});
+  m.push_back({"Bhattacharyya, 5 yaw layers, occluders given",
+               "as 5 yaw layers, plus the occluder returns of both scans (a second, local search "
+               "on the mutually visible parts)",
+               [] { return makeBr(5); }, true});
   return m;
 }
 
@@ -170,6 +177,13 @@ Result run(const Method& method, const std::vector<RegistrationPair>& pairs,
     const double start = cpuMs();
     reg->setInputSource(p.source);
     reg->setInputTarget(p.target);
+    if (method.occluders)
+      if (auto* b =
+              dynamic_cast<pcl_movers::BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ>*>(
+                  reg.get())) {
+        b->setSourceOccluders(p.source_occluders);
+        b->setTargetOccluders(p.target_occluders);
+      }
     reg->align(out, guess);
     const double ms = cpuMs() - start;
     const Eigen::Matrix4f est = reg->getFinalTransformation();
@@ -493,6 +507,10 @@ int failures(const char* variant) {
     const RegistrationPair& p = sim[t.pair];
     auto reg = makeBr(5);
     configure(*reg);
+    if (v.find("occ") != std::string::npos) {
+      reg->setSourceOccluders(p.source_occluders);
+      reg->setTargetOccluders(p.target_occluders);
+    }
     const Eigen::Matrix4f guess = pcl_movers::eval::perturbedGuess(p, t.offset, t.angle);
     reg->setInputSource(p.source);
     reg->setInputTarget(p.target);
@@ -508,6 +526,10 @@ int failures(const char* variant) {
     // B at the truth (guess = truth, radius small) for comparison with B at the found peak.
     auto at_truth = makeBr(5);
     configure(*at_truth);
+    if (v.find("occ") != std::string::npos) {
+      at_truth->setSourceOccluders(p.source_occluders);
+      at_truth->setTargetOccluders(p.target_occluders);
+    }
     at_truth->setSearchRadius(0.4f);
     at_truth->setInputSource(p.source);
     at_truth->setInputTarget(p.target);
