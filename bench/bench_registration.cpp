@@ -5,6 +5,9 @@
  *
  *   bench_registration --report    the comparison as Markdown (scripts/bench_registration.sh)
  *   bench_registration [gbench flags]   Google Benchmark timings of one align() per method
+ *   bench_registration --failures [VARIANT]   every failed simulated pair (diagnosis; VARIANT
+ *                                 containing "occ" hands the occluder returns over)
+ *   --slices N (before the above)   N vertical slices for every Bhattacharyya method
  *
  * SPDX-License-Identifier: BSD-3-Clause
  */
@@ -54,11 +57,15 @@ struct Method {
   bool occluders = false;
 };
 
+/** Vertical slices of every BhattacharyaRegistration here (--slices N; 0: the class default). */
+int g_vertical_slices = 0;
+
 pcl_movers::BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ>::Ptr makeBr(int yaws) {
   auto r = pcl::make_shared<pcl_movers::BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ>>();
   r->setSearchRadius(3.2f);
   r->setYawSamples(yaws);
   r->setYawStep(5.f * kPi / 180.f);
+  if (g_vertical_slices > 0) r->setVerticalSlices(g_vertical_slices);
   return r;
 }
 
@@ -755,6 +762,9 @@ BENCHMARK(BM_TrackerPattern)->Unit(benchmark::kMicrosecond);
 }  // namespace
 
 int main(int argc, char** argv) {
+  // --slices N (before the mode flag): vertical slices of the Bhattacharyya methods.
+  for (int i = 1; i + 1 < argc; ++i)
+    if (std::strcmp(argv[i], "--slices") == 0) g_vertical_slices = std::atoi(argv[i + 1]);
   for (int i = 1; i < argc; ++i)
     if (std::strcmp(argv[i], "--report") == 0)
       return report();
