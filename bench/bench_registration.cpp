@@ -57,8 +57,10 @@ struct Method {
   bool occluders = false;
 };
 
-/** Vertical slices of every BhattacharyaRegistration here (--slices N; 0: the class default). */
-int g_vertical_slices = 0;
+/** Vertical slices of every BhattacharyaRegistration here (--slices N; 0: the class default of
+ * 7). 3 by default, the paper's reduced vertical resolution: same success on both sets, ROC AUC
+ * 0.959 / 1.000 (7 slices: 0.962 / 1.000), about half the time. */
+int g_vertical_slices = 3;
 
 pcl_movers::BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ>::Ptr makeBr(int yaws) {
   auto r = pcl::make_shared<pcl_movers::BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ>>();
@@ -71,10 +73,10 @@ pcl_movers::BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ>::Ptr makeBr(i
 
 std::vector<Method> methods() {
   std::vector<Method> m;
-  m.push_back(
-      {"Bhattacharyya, translation only",
-       "29x29x7 grid, 0.2 m cells, sigma = max(0.1 m, 0.005 range), window +-3.2 m, 1 yaw layer",
-       [] { return makeBr(1); }});
+  m.push_back({"Bhattacharyya, translation only",
+               "29x29x3 grid (0.2 m cells, 0.93 m slices), sigma = max(0.1 m, 0.005 range), window "
+               "+-3.2 m, 1 yaw layer",
+               [] { return makeBr(1); }});
   m.push_back({"Bhattacharyya, 5 yaw layers", "as above, yaw layers -10..+10 deg step 5 deg",
                [] { return makeBr(5); }});
   m.push_back(
@@ -421,8 +423,9 @@ int report() {
     std::function<void(pcl_movers::BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ>&)> set;
   };
   const std::vector<Variant> variants = {
-      {"default: 29x29x7, 0.2 m, sigma 0.005 per metre", [](auto&) {}},
-      {"3 vertical slices (paper's reduced resolution)", [](auto& r) { r.setVerticalSlices(3); }},
+      {"default: 29x29x3 (paper's reduced vertical resolution), 0.2 m, sigma 0.005 per metre",
+       [](auto&) {}},
+      {"7 vertical slices (0.4 m, the class default)", [](auto& r) { r.setVerticalSlices(7); }},
       {"1 vertical slice", [](auto& r) { r.setVerticalSlices(1); }},
       {"0.25 m cells, 25x25x7",
        [](auto& r) {
@@ -487,6 +490,7 @@ int failures(const char* variant) {
     if (v == "ms02") r.setMinSigma(0.2f);
     if (v == "z") r.setSearchZ(true);
     if (v == "v3") r.setVerticalSlices(3);
+    if (v == "v7") r.setVerticalSlices(7);
     if (v == "v14") {
       r.setVerticalSlices(14);
     }
