@@ -96,6 +96,72 @@ void refinePeak(int dims, const bool* active, const std::function<float(const in
   *value = centre + gain;
 }
 
+namespace {
+constexpr float kShadowAzBin = 0.12f * 3.14159265f / 180.f;
+constexpr float kShadowElBin = 0.3f * 3.14159265f / 180.f;
+constexpr float kTwoPi = 6.28318531f;
+}  // namespace
+
+void ShadowImage::build(const std::vector<Eigen::Vector3f>& occluders,
+                        const Eigen::Vector3f& sensor) {
+  sensor_ = sensor;
+  range_.clear();
+  naz_ = nel_ = 0;
+  if (occluders.empty()) return;
+  // Azimuths relative to the first return's, so that an image straddling ±π stays contiguous.
+  const Eigen::Vector3f r0 = occluders.front() - sensor;
+  const float ref = std::atan2(r0.y(), r0.x());
+  float amin = std::numeric_limits<float>::max(), amax = -amin, emin = amin, emax = -amin;
+  std::vector<Eigen::Vector3f> aer;  // relative azimuth, elevation, range
+  aer.reserve(occluders.size());
+  for (const auto& q : occluders) {
+    const Eigen::Vector3f r = q - sensor;
+    const float range = r.norm();
+    if (!(range > 0.f) || !std::isfinite(range)) continue;
+    float az = std::atan2(r.y(), r.x()) - ref;
+    if (az > 0.5f * kTwoPi) az -= kTwoPi;
+    if (az < -0.5f * kTwoPi) az += kTwoPi;
+    const float el = std::asin(std::min(1.f, std::max(-1.f, r.z() / range)));
+    aer.emplace_back(az, el, range);
+    amin = std::min(amin, az);
+    amax = std::max(amax, az);
+    emin = std::min(emin, el);
+    emax = std::max(emax, el);
+  }
+  if (aer.empty()) return;
+  // One bin of margin on each side for the dilation below.
+  az0_ = ref + amin - kShadowAzBin;
+  el0_ = emin - kShadowElBin;
+  naz_ = static_cast<int>(std::min((amax - amin) / kShadowAzBin, 4000.f)) + 3;
+  nel_ = static_cast<int>(std::min((emax - emin) / kShadowElBin, 400.f)) + 3;
+  range_.assign(static_cast<std::size_t>(naz_) * nel_, std::numeric_limits<float>::infinity());
+  for (const auto& v : aer) {
+    const int ia = static_cast<int>((v.x() - amin) / kShadowAzBin) + 1;
+    const int ie = static_cast<int>((v.y() - emin) / kShadowElBin) + 1;
+    for (int e = std::max(0, ie - 1); e <= std::min(nel_ - 1, ie + 1); ++e)
+      for (int a = std::max(0, ia - 1); a <= std::min(naz_ - 1, ia + 1); ++a) {
+        float& r = range_[static_cast<std::size_t>(e) * naz_ + a];
+        r = std::min(r, v.z());
+      }
+  }
+}
+
+bool ShadowImage::shadowed(const Eigen::Vector3f& p, float margin) const {
+  if (range_.empty()) return false;
+  const Eigen::Vector3f r = p - sensor_;
+  const float range = r.norm();
+  if (!(range > 0.f) || !std::isfinite(range)) return false;
+  float az = std::atan2(r.y(), r.x()) - az0_;
+  while (az < 0.f) az += kTwoPi;
+  while (az >= kTwoPi) az -= kTwoPi;
+  const float el = std::asin(std::min(1.f, std::max(-1.f, r.z() / range))) - el0_;
+  if (el < 0.f) return false;
+  const float fa = az / kShadowAzBin, fe = el / kShadowElBin;
+  if (fa >= static_cast<float>(naz_) || fe >= static_cast<float>(nel_)) return false;
+  const float occ = range_[static_cast<std::size_t>(fe) * naz_ + static_cast<std::size_t>(fa)];
+  return occ < range - margin;
+}
+
 void buildSourceLayer(SourceLayer& layer, const std::vector<Eigen::Vector3f>& points,
                       const std::vector<float>& sigmas, const SurfaceDensity& target, int nr,
                       int nrz) {

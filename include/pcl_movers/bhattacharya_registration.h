@@ -187,6 +187,27 @@ class BhattacharyaRegistration : public pcl::Registration<PointSource, PointTarg
   void setMinSigma(float min_sigma) { min_sigma_ = min_sigma; }
   float getMinSigma() const { return min_sigma_; }
 
+  /** \brief Returns of other objects (occluders) in the source's scan, and in the target's
+   * scan, in the frame of the respective cloud (e.g. the scan points in front of the object).
+   * When either is set, a converged align() is followed by a second, local search (±1 m, at
+   * most the search radius) on the two views reduced to what both could see: source points that
+   * the target's occluders would hide at the first estimate, and target points that the source's
+   * occluders would hide, are left out (a return counts as an occluder of a point when it lies in
+   * the point's direction, seen from that scan's sensor, ≥ 0.3 m closer; points next to the
+   * edge of their own scan's occluders go too, so that both views end at the same edge). The
+   * pass is repeated (up to 3 times) while the estimate moves by ≥ 1 cm. A static occluder cuts
+   * the object at the same place in both scans, which otherwise pulls the estimate towards no
+   * motion. Target culling needs a target cloud (not setTargetDensity()). The first result stands
+   * when the second search does not converge. nullptr (the default) switches a side off. */
+  void setSourceOccluders(const PointCloudSourceConstPtr& occluders) {
+    source_occluders_ = occluders;
+  }
+  PointCloudSourceConstPtr getSourceOccluders() const { return source_occluders_; }
+  void setTargetOccluders(const PointCloudTargetConstPtr& occluders) {
+    target_occluders_ = occluders;
+  }
+  PointCloudTargetConstPtr getTargetOccluders() const { return target_occluders_; }
+
   /** \brief B below this means "no match": hasConverged() is false (default 0.2). */
   void setMinSimilarity(float min_similarity) { min_similarity_ = min_similarity; }
   float getMinSimilarity() const { return min_similarity_; }
@@ -221,6 +242,16 @@ class BhattacharyaRegistration : public pcl::Registration<PointSource, PointTarg
 
   void computeTransformation(PointCloudSource& output, const Matrix4& guess) override;
 
+  /** \brief The search of align() from `guess` over ±radius: sets the final transformation,
+   * similarity, surface and source density. `source_keep` (per index of indices_) leaves source
+   * points out, `target_override` replaces the target density. */
+  void search(const Matrix4& guess, float radius, const std::vector<char>* source_keep,
+              const SurfaceDensity* target_override);
+  /** \brief The second, local search on the mutually visible parts (see setSourceOccluders()). */
+  void occlusionPass();
+  static constexpr float kOcclusionRadius = 1.0f;
+  static constexpr int kOcclusionPasses = 3;
+
   /** \brief The target's density: the one set with setTargetDensity(), or the one built from
    * target_ (kept between calls while the cloud and the grid parameters stay the same). Null
    * when it is empty or the target has < 2 finite points. */
@@ -243,6 +274,8 @@ class BhattacharyaRegistration : public pcl::Registration<PointSource, PointTarg
   CorrelationMethod correlation_method_ = CorrelationMethod::Auto;
   CorrelationMethod last_method_ = CorrelationMethod::Direct;
   int sub_cell_iterations_ = 2;
+  PointCloudSourceConstPtr source_occluders_;
+  PointCloudTargetConstPtr target_occluders_;
   /** Buffers, FFT plans and the target caches reused between align() calls (no heap traffic
    * per call once warm); shared by copies of this object. */
   std::shared_ptr<detail::BhattacharyaWorkspace> work_;

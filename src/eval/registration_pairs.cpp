@@ -260,13 +260,22 @@ std::vector<RegistrationPair> makeSimulatedPairs(std::size_t count, unsigned see
       label += "+occluded";
     }
     RegistrationPair pair;
+    const float phase_a = u(rng);
     pair.target = pcl::make_shared<pcl::PointCloud<pcl::PointXYZ>>(
-        rayCastObject(scene_a, 0, sensor_a, u(rng), 0.02f, rng));
+        rayCastObject(scene_a, 0, sensor_a, phase_a, 0.02f, rng));
+    const float phase_b = u(rng);
     pair.source = pcl::make_shared<pcl::PointCloud<pcl::PointXYZ>>(
-        rayCastObject(scene_b, 0, sensor_b, u(rng), 0.02f, rng));
+        rayCastObject(scene_b, 0, sensor_b, phase_b, 0.02f, rng));
     if (static_cast<int>(pair.target->size()) < min_points ||
         static_cast<int>(pair.source->size()) < min_points)
       continue;
+    // The occluder's returns in the same two scans, from a generator of their own so that the
+    // pairs themselves stay those of earlier versions.
+    std::mt19937 occ_rng(seed * 7919u + static_cast<unsigned>(pairs.size()));
+    pair.target_occluders = pcl::make_shared<pcl::PointCloud<pcl::PointXYZ>>(
+        rayCastObject(scene_a, 1, sensor_a, phase_a, 0.02f, occ_rng));
+    pair.source_occluders = pcl::make_shared<pcl::PointCloud<pcl::PointXYZ>>(
+        rayCastObject(scene_b, 1, sensor_b, phase_b, 0.02f, occ_rng));
     pair.reference = obj.centre(xy_b);
     pair.truth = planarMotion(obj.centre(xy_b), obj.centre(xy_a), -dyaw);
     pair.label = label;

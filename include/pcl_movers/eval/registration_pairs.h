@@ -44,6 +44,9 @@ struct RegistrationPair {
   Eigen::Vector3f reference = Eigen::Vector3f::Zero();  ///< object centre in the source (errors)
   std::string label;                                    ///< class / description
   float range = 0.f;                                    ///< distance of the object [m]
+  /** Returns of other objects in the two scans (simulated pairs: the occluder's; empty when
+   * there is none), for BhattacharyaRegistration::setSourceOccluders()/setTargetOccluders(). */
+  pcl::PointCloud<pcl::PointXYZ>::Ptr source_occluders, target_occluders;
 };
 
 /** \brief Simulated pairs: vehicles (two boxes) and people (two cylinders) at 10-60 m, object

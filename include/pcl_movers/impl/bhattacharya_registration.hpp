@@ -10,8 +10,10 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <functional>
 #include <limits>
+#include <vector>
 
 namespace pcl_movers {
 
@@ -33,6 +35,25 @@ struct SourceLayer {
   std::vector<int> nonzero;    ///< indices of the cells with sqrt(ρ) > 0
 };
 
+/** \brief Where the returns of occluders hide what lies behind them, seen from one sensor: the
+ * smallest occluder range per bin of azimuth (0.12°) × elevation (0.3°), each return also
+ * covering the neighbouring bins (the gaps between beams and azimuth steps). Defined in
+ * src/bhattacharya_registration.cpp. */
+class ShadowImage {
+ public:
+  void build(const std::vector<Eigen::Vector3f>& occluders, const Eigen::Vector3f& sensor);
+  /** \brief True when an occluder return lies in p's direction more than `margin` m closer
+   * to the sensor than p. */
+  bool shadowed(const Eigen::Vector3f& p, float margin = 0.3f) const;
+  bool empty() const { return range_.empty(); }
+
+ private:
+  Eigen::Vector3f sensor_ = Eigen::Vector3f::Zero();
+  float az0_ = 0.f, el0_ = 0.f;
+  int naz_ = 0, nel_ = 0;
+  std::vector<float> range_;
+};
+
 /** \brief Everything align() reuses between calls: point buffers, source layers, score arrays,
  * the density built from a target cloud, FFT plans and the target's cached spectra. */
 struct BhattacharyaWorkspace {
@@ -41,6 +62,12 @@ struct BhattacharyaWorkspace {
   std::vector<SourceLayer> layers;
   SourceLayer refine[3];
   std::vector<float> scores, block, local;
+  // Occlusion pass (setSourceOccluders() / setTargetOccluders()).
+  ShadowImage source_shadow, target_shadow;
+  std::vector<char> source_keep;
+  std::vector<Eigen::Vector3f> culled_points;
+  std::vector<float> culled_sigmas;
+  SurfaceDensity culled_target{1, 1, 1, 0.2f, 0.4f};
   // Density of the target cloud (when no target density is set) and what it was built from.
   SurfaceDensity own_target{1, 1, 1, 0.2f, 0.4f};
   bool own_target_valid = false;
@@ -197,6 +224,116 @@ const SurfaceDensity* BhattacharyaRegistration<PointSource, PointTarget, Scalar>
 template <typename PointSource, typename PointTarget, typename Scalar>
 void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::computeTransformation(
     PointCloudSource& output, const Matrix4& guess) {
+  search(guess, search_radius_, nullptr, nullptr);
+  if ((source_occluders_ && !source_occluders_->empty()) ||
+      (target_occluders_ && !target_occluders_->empty())) {
+    // The culling depends on the estimate: repeat while it still moves.
+    for (int pass = 0; pass < kOcclusionPasses && converged_; ++pass) {
+      const Matrix4 before = final_transformation_;
+      occlusionPass();
+      if ((final_transformation_.template topRightCorner<3, 1>() -
+           before.template topRightCorner<3, 1>())
+              .norm() < Scalar(0.01))
+        break;
+    }
+  }
+  if (output.size() > 0) pcl::transformPointCloud(output, output, final_transformation_);
+}
+
+template <typename PointSource, typename PointTarget, typename Scalar>
+void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::occlusionPass() {
+  detail::BhattacharyaWorkspace& w = *work_;
+  const Eigen::Matrix4f est = final_transformation_.template cast<float>();
+  const Eigen::Matrix4f est_inv = est.inverse();
+  if (!est_inv.allFinite()) return;
+  const Eigen::Vector3f src_origin =
+      use_sensor_origin_ ? sensor_origin_ : input_->sensor_origin_.template head<3>();
+  const Eigen::Vector3f tgt_origin =
+      use_sensor_origin_ ? sensor_origin_ : target_->sensor_origin_.template head<3>();
+  // Shadows of each scan's occluders, seen from that scan's sensor.
+  auto shadows = [](detail::ShadowImage& image, const auto& cloud, const Eigen::Vector3f& origin) {
+    std::vector<Eigen::Vector3f> pts;
+    if (cloud)
+      for (const auto& p : cloud->points)
+        if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))
+          pts.emplace_back(p.x, p.y, p.z);
+    image.build(pts, origin);
+  };
+  shadows(w.target_shadow, target_occluders_, tgt_origin);
+  shadows(w.source_shadow, source_occluders_, src_origin);
+  // Source points that the target's occluders would hide at the estimated motion, and target
+  // points that the source's occluders would hide: left out so that both views show the same
+  // parts of the object.
+  std::size_t culled = 0, kept_src = 0;
+  w.source_keep.assign(indices_->size(), 1);
+  for (std::size_t k = 0; k < indices_->size(); ++k) {
+    const auto& p = (*input_)[(*indices_)[k]];
+    // Also the source's own points in the (dilated) shadow of its occluders: their twins in the
+    // target are culled by the same test, so both views end at the same edge.
+    const Eigen::Vector4f v = est * Eigen::Vector4f(p.x, p.y, p.z, 1.f);
+    if (v.allFinite() && (w.target_shadow.shadowed(v.template head<3>()) ||
+                          w.source_shadow.shadowed(Eigen::Vector3f(p.x, p.y, p.z)))) {
+      w.source_keep[k] = 0;
+      ++culled;
+    } else {
+      ++kept_src;
+    }
+  }
+  const SurfaceDensity* target_override = nullptr;
+  if (!target_density_ && !(w.source_shadow.empty() && w.target_shadow.empty())) {
+    std::vector<Eigen::Vector3f>& pts = w.culled_points;
+    std::vector<float>& sig = w.culled_sigmas;
+    pts.clear();
+    sig.clear();
+    Eigen::Vector3f lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
+    Eigen::Vector3f hi = -lo;
+    for (const auto& p : target_->points) {
+      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
+      const Eigen::Vector3f v(p.x, p.y, p.z);
+      const Eigen::Vector4f back = est_inv * Eigen::Vector4f(p.x, p.y, p.z, 1.f);
+      if (w.source_shadow.shadowed(back.template head<3>()) || w.target_shadow.shadowed(v)) {
+        ++culled;
+        continue;
+      }
+      pts.push_back(v);
+      sig.push_back(std::max(min_sigma_, sigma_per_metre_ * (v - tgt_origin).norm()));
+      lo = lo.cwiseMin(v);
+      hi = hi.cwiseMax(v);
+    }
+    if (pts.size() < 2) return;
+    if (culled > 0) {
+      SurfaceDensity& t = w.culled_target;
+      t.setGridSize(nx_, ny_, nz_);
+      t.setResolution(resolution_);
+      t.setResolutionZ(grid_height_ / static_cast<float>(nz_));
+      t.setSigmaPerMetre(sigma_per_metre_);
+      t.setMinSigma(min_sigma_);
+      t.computeFromPoints(pts, sig, Eigen::Vector3f(0.5f * (lo + hi)));
+      if (t.empty()) return;
+      target_override = &t;
+    }
+  }
+  if (culled == 0 || kept_src < 2) return;
+  // A local search from the first estimate on the views reduced to their common visible part;
+  // the first result stands when this one does not converge.
+  const Matrix4 first = final_transformation_;
+  const float first_similarity = similarity_;
+  SimilaritySurface first_surface = surface_;
+  SurfaceDensity::Ptr first_density = source_density_;
+  search(first, std::min(search_radius_, kOcclusionRadius), &w.source_keep, target_override);
+  if (!converged_) {
+    final_transformation_ = transformation_ = first;
+    similarity_ = first_similarity;
+    surface_ = std::move(first_surface);
+    source_density_ = first_density;
+    converged_ = true;
+  }
+}
+
+template <typename PointSource, typename PointTarget, typename Scalar>
+void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::search(
+    const Matrix4& guess, float radius, const std::vector<char>* source_keep,
+    const SurfaceDensity* target_override) {
   converged_ = false;
   similarity_ = 0.f;
   surface_.nx = surface_.ny = 0;
@@ -208,11 +345,10 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::computeTransfor
 
   auto finish = [&]() {
     if (!keep_source_density) source_density_.reset();
-    if (output.size() > 0) pcl::transformPointCloud(output, output, final_transformation_);
   };
-  if (!(resolution_ > 0.f) || !(search_radius_ > 0.f) || nx_ < 1 || ny_ < 1 || nz_ < 1 ||
-      !(grid_height_ > 0.f) || yaw_samples_ < 1 || !std::isfinite(search_radius_) ||
-      search_radius_ / resolution_ > 1000.f) {
+  if (!(resolution_ > 0.f) || !(radius > 0.f) || nx_ < 1 || ny_ < 1 || nz_ < 1 ||
+      !(grid_height_ > 0.f) || yaw_samples_ < 1 || !std::isfinite(radius) ||
+      radius / resolution_ > 1000.f) {
     PCL_ERROR("[pcl_movers::%s] invalid parameters (resolution, radius, grid or yaw samples)\n",
               reg_name_.c_str());
     finish();
@@ -226,7 +362,7 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::computeTransfor
   detail::BhattacharyaWorkspace& w = *work_;
 
   // ---- target density (the "model")
-  const SurfaceDensity* target_ptr = targetDensity();
+  const SurfaceDensity* target_ptr = target_override ? target_override : targetDensity();
   if (!target_ptr) {
     finish();
     return;
@@ -243,8 +379,9 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::computeTransfor
   sigmas.clear();
   const Eigen::Matrix3f guess_r = guess_f.template topLeftCorner<3, 3>();
   const Eigen::Vector3f guess_t = guess_f.template topRightCorner<3, 1>();
-  for (const auto idx : *indices_) {
-    const auto& p = (*input_)[idx];
+  for (std::size_t k = 0; k < indices_->size(); ++k) {
+    if (source_keep && !(*source_keep)[k]) continue;
+    const auto& p = (*input_)[(*indices_)[k]];
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
     const Eigen::Vector3f v(p.x, p.y, p.z);
     const float sigma = std::max(min_sigma_, sigma_per_metre_ * (v - src_origin).norm());
@@ -263,7 +400,7 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::computeTransfor
   turned.resize(points.size());
 
   // ---- search window: translations d of ±nr cells (±nrz in z) around the guess
-  const int nr = std::max(1, static_cast<int>(std::ceil(search_radius_ / res - 1e-4f)));
+  const int nr = std::max(1, static_cast<int>(std::ceil(radius / res - 1e-4f)));
   const int nrz =
       search_z_ ? std::max(1, static_cast<int>(std::ceil(search_radius_z_ / res_z - 1e-4f))) : 0;
   const int wx = 2 * nr + 1, wz = 2 * nrz + 1;
