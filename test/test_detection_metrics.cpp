@@ -325,3 +325,31 @@ TEST(EvalTool, ScoresAndRejectsBadInput) {
   EXPECT_NE(runTool((dir / "objects.txt").string()), 0);  // TRACKS missing
   fs::remove_all(dir);
 }
+
+// The extra variant counts only frames in which the target itself moves (speed_mps >= 0.5): a van
+// flagged moving that waits 4 frames before driving off is missed there by any motion detector.
+// The DESIGN hit rate is unchanged and still counts all 10 frames.
+TEST(DetectionMetrics, ExtraHitRateOverMovingFramesOnly) {
+  std::vector<GroundTruthObject> objects;
+  std::vector<TrackRow> tracks;
+  for (int f = 0; f < 10; ++f) {
+    objects.push_back(object(f, 3, 10.0 + (f >= 4 ? 0.5 * (f - 4) : 0.0), 0.0, true));
+    if (f < 4) objects.back().speed = 0.0;  // standing still
+    if (f >= 5) tracks.push_back(row(f, 1, objects.back().center.x(), 0.0));
+  }
+  const auto s = scoreDetections(objects, tracks);
+  ASSERT_EQ(s.targets.size(), 1u);
+  const auto& t = s.targets[0];
+  EXPECT_EQ(t.visible_frames, 10);
+  EXPECT_EQ(t.hits, 5);
+  EXPECT_NEAR(t.hitRate(), 0.5, 1e-12);
+  EXPECT_EQ(t.moving_frames, 6);
+  EXPECT_EQ(t.moving_hits, 5);
+  EXPECT_NEAR(t.movingHitRate(), 5.0 / 6.0, 1e-12);
+  EXPECT_NEAR(s.mean_hit_rate, 0.5, 1e-12);
+  EXPECT_NEAR(s.mean_moving_hit_rate, 5.0 / 6.0, 1e-12);
+  const std::string md = pcl_movers::eval::formatMarkdown(s);
+  EXPECT_NE(md.find("extra (not the DESIGN metric)"), std::string::npos);
+  EXPECT_NE(pcl_movers::eval::formatJson(s).find("\"extra_mean_moving_hit_rate\": 0.8333"),
+            std::string::npos);
+}

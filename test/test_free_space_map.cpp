@@ -245,3 +245,23 @@ TEST(FreeSpaceMap, FastAtan2IsAccurateToAThousandthOfADegree) {
   EXPECT_LT(worst, 1e-3);
   EXPECT_FLOAT_EQ(pcl_movers::detail::fastAtan2Deg(0, 0), 0.0f);
 }
+
+TEST(FreeSpaceMap, FreeSpaceVotesAccumulateWithTheSpeedVotes) {
+  // A pedestrian-sized object crossing 12 m ahead at 3 m/s, static ego. Free-space tests run
+  // from the track's first fast update (third update on), in parallel with the speed votes, so
+  // the decision does not wait for the speed votes before collecting free-space votes: the mover
+  // is declared at the 5th update (frame 4, the first with 3 speed votes); testing free space only
+  // after the speed votes passed (the earlier rule) declared it one frame later.
+  auto scene = [](int f, Eigen::Vector2d& ego) {
+    ego = Eigen::Vector2d(0, 0);
+    return std::vector<Box>{{{12, -4 + 0.3 * f}, 0.6, 0.6, 1.8}};
+  };
+  auto all = [](int, const Eigen::Vector3f&) { return true; };
+  pcl_movers::DetectorParameters params;
+  const auto mover = runTracker(params, true, 15, scene, all);
+  int first = -1;
+  for (std::size_t f = 0; f < mover.size(); ++f)
+    if (mover[f] && first < 0) first = static_cast<int>(f);
+  EXPECT_GE(first, 3);  // never before mover_min_age updates
+  EXPECT_LE(first, 4);
+}

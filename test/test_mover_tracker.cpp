@@ -226,3 +226,56 @@ TEST(MoverTracker, SmallClustersAreNotTracked) {
   EXPECT_EQ(tracker.getClusterResults()[0].track_id, -1);
   EXPECT_TRUE(tracker.getTracks().empty());
 }
+
+// A truck emerging from behind an occluder (a building corner at x = 0): its front is seen first,
+// so the registered reference point sits at the front while the centroid of the visible part
+// falls back by up to half the truck length. The track must keep its identity (candidates are
+// gated against the predicted centroid, not the predicted reference point) and become a mover.
+TEST(MoverTracker, EmergingTruckKeepsOneTrack) {
+  Tracker tracker;
+  tracker.setParameters(defaults());
+  std::set<int> ids;
+  int movers = 0;
+  const int frames = 30;
+  for (int k = 0; k < frames; ++k) {
+    const double t = k * 0.1;
+    const Eigen::Vector3d sensor(10, -15, 1.7);
+    // The truck's front passes the occluder edge at k = 0 and moves on at 8 m/s.
+    const Eigen::Vector2d centre(0.5 - 4.0 + 8.0 * t, 0);
+    SceneBuilder scene;
+    scene.addBox(sensor, centre, 0, 8.0, 2.5, 3.0);
+    pcl::PointIndices visible;
+    for (const int i : scene.clusters[0].indices)
+      if ((*scene.cloud)[i].x > 0) visible.indices.push_back(i);
+    scene.clusters[0] = visible;
+    const auto results = step(tracker, scene, sensor, t);
+    ASSERT_EQ(results.size(), 1u);
+    ids.insert(results[0].track_id);
+    movers += results[0].mover;
+  }
+  EXPECT_EQ(ids.size(), 1u);
+  EXPECT_GE(movers, frames - 10);
+}
+
+// A van seen tall at first and then only as a low cluster (e.g. from straight behind, where only
+// its lower part is segmented): the height test of the mover decision uses the tallest view, so
+// it is still confirmed. A cluster that is never tall (a kerb) stays static.
+TEST(MoverTracker, HeightTestUsesTallestView) {
+  for (const bool ever_tall : {true, false}) {
+    Tracker tracker;
+    tracker.setParameters(defaults());
+    int movers = 0;
+    for (int k = 0; k < 25; ++k) {
+      const double t = k * 0.1;
+      const Eigen::Vector3d sensor(0, -12, 1.7);
+      SceneBuilder scene;
+      const double height = ever_tall && k < 3 ? 2.2 : 0.7;
+      scene.addBox(sensor, Eigen::Vector2d(-10 + 7.0 * t, 0), 0, 5.0, 2.0, height);
+      movers += step(tracker, scene, sensor, t)[0].mover;
+    }
+    if (ever_tall)
+      EXPECT_GT(movers, 10);
+    else
+      EXPECT_EQ(movers, 0);
+  }
+}

@@ -110,7 +110,8 @@ struct DetectorParameters {
   /// ones (buildings, walls, hedges) are tracked by centroid and always static.
   double max_mover_length = 12.0;
   double max_mover_height = 4.5;
-  /// Clusters lower than this are not movers [m] (kerbs, ground clutter).
+  /// Clusters lower than this are not movers [m] (kerbs, ground clutter). The tracker compares the
+  /// tallest view of a track (a van seen from straight behind can show a lower cluster).
   double min_mover_height = 0.8;
 
   // ------------------------------------------------------------------ mover decision
@@ -134,7 +135,8 @@ struct DetectorParameters {
   /// Fraction of the tested points that must be seen through, and at least this many points.
   double free_space_min_fraction = 0.2;
   int free_space_min_points = 3;
-  /// Tests that must pass (among the last mover_window ones) before a track is confirmed.
+  /// Tests that must pass (among the last mover_window ones) before a track is confirmed. Tests run
+  /// on every fast update from a track's third update on, in parallel with the speed votes.
   int free_space_votes = 2;
   /// Seen through = the earlier range exceeds the point's distance by max(margin,
   /// margin_per_metre · distance) [m, m/m] (range noise, pose error, beam footprint).

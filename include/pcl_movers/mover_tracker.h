@@ -29,7 +29,8 @@ namespace pcl_movers {
  *  1. predict all tracks to the frame time;
  *  2. gate: a cluster is a candidate of a track when its centroid lies within
  *     `gate_sigmas`·σ (innovation covariance) + ½·`acceleration_limit`·dt² + `gate_margin` of the
- *     predicted position, at most `max_gate_radius` (the acceleration limit bounds the search);
+ *     predicted centroid (predicted reference point + the centroid offset of the last update),
+ *     at most `max_gate_radius` (the acceleration limit bounds the search);
  *  3. registration mode: each candidate is registered with BhattacharyaRegistration against the
  *     track's model, the search window centred on the prediction and as wide as the gate; its
  *     similarity B is the association score and B < `min_similarity` is not an update (occlusion
@@ -43,10 +44,12 @@ namespace pcl_movers {
  *  6. mover decision: speed > `mover_speed` (and > `mover_speed_sigmas` times its own standard
  *     deviation, so young or far tracks with vague velocities wait) in `mover_votes` of the last
  *     `mover_window` updates,
- *     at least `mover_min_age` updates, and the net displacement of the measurements over the
+ *     at least `mover_min_age` updates, the tallest view at least `min_mover_height`, the net
+ *     displacement of the measurements over the
  *     window at least `displacement_ratio`·`mover_speed`·elapsed time (a filter velocity inflated
  *     by a few noisy measurements does not survive this check), and — when a FreeSpaceMap is set —
- *     free-space evidence: at least `free_space_min_fraction` of the object's points lie in space
+ *     free-space evidence (tests run on every fast update from the third on, in parallel with
+ *     the speed votes): at least `free_space_min_fraction` of the object's points lie in space
  *     an earlier scan saw through, or its earlier points lie in space the current scan sees
  *     through (FreeSpaceMap). Static objects cannot produce this evidence, whatever their
  *     registration or segmentation errors, so it rejects the centroid-shift and registration-slip
@@ -105,7 +108,14 @@ class MoverTracker {
     bool large = false;        ///< static structure tracked by centroid
     double similarity = 0;     ///< B of the last update (0 in centroid mode / at birth)
     ClusterFeatures features;  ///< geometry of the last cluster assigned
-    std::deque<char> fast;     ///< speed > mover_speed after each of the last updates
+    /// Cluster centroid minus measured reference point at the last update (x, y): the reference
+    /// point stays where the object was first seen while the visible part (and so the centroid)
+    /// changes with the view, so candidates are gated against the predicted *centroid*.
+    Eigen::Vector2d centroid_offset = Eigen::Vector2d::Zero();
+    /// Tallest (not large) view of the object so far [m]: the height test of the mover decision
+    /// uses it, as a van seen from straight behind can show a lower cluster than its height.
+    double max_height = 0;
+    std::deque<char> fast;                ///< speed > mover_speed after each of the last updates
     std::deque<Eigen::Vector3d> history;  ///< (x, y, time) of the last measurements
     SurfaceDensity::Ptr model;            ///< accumulated surface density (registration mode)
     int since_registration = 0;  ///< cheap (unregistered) frames since the last registration

@@ -35,6 +35,12 @@ struct DetectionMetricsParams {
    * velocities from box centres when poses are given (labelled box centres jitter by a few cm;
    * a plain two-frame difference would turn that into tenths of m/s). */
   int velocity_half_window = 2;
+  /** \brief Extra variant, NOT the DESIGN metric (reported next to it): hit rates over the
+   * visible frames in which the target's own speed (objects.txt `speed_mps`) is at least this
+   * [m/s]. DESIGN counts every visible frame of a track whose moving flag is 1, including frames
+   * where it stands still (the open scene's van waits ~40 frames before driving off), which no
+   * detector of motion can hit before it has seen the object move. */
+  double moving_speed = 0.5;
 };
 
 /** \brief Per-target result. */
@@ -50,6 +56,14 @@ struct TargetScore {
   /** \brief RMS velocity error over hits with a ground-truth velocity [m/s]; NaN when none. */
   double rms_velocity_error = std::numeric_limits<double>::quiet_NaN();
   int velocity_samples = 0;
+  /** \brief Extra variant (see DetectionMetricsParams::moving_speed): visible frames with the
+   * target's speed >= moving_speed, and the hits among them. */
+  int moving_frames = 0;
+  int moving_hits = 0;
+  double movingHitRate() const {
+    return moving_frames > 0 ? double(moving_hits) / moving_frames
+                             : std::numeric_limits<double>::quiet_NaN();
+  }
   double hitRate() const {
     return visible_frames > 0 ? double(hits) / visible_frames
                               : std::numeric_limits<double>::quiet_NaN();
@@ -67,6 +81,9 @@ struct DetectionScore {
   int false_alarms_on_static_objects = 0;
   double mean_hit_rate = std::numeric_limits<double>::quiet_NaN();    ///< over visible targets
   double pooled_hit_rate = std::numeric_limits<double>::quiet_NaN();  ///< all hits / all visible
+  /** \brief Extra variant, not the DESIGN metric: mean over targets of movingHitRate(). */
+  double mean_moving_hit_rate = std::numeric_limits<double>::quiet_NaN();
+  double moving_speed = 0.5;  ///< the threshold used for the extra variant [m/s]
   double false_alarms_per_frame = 0;
   double median_delay = std::numeric_limits<double>::quiet_NaN();  ///< over detected targets
   int targets_never_detected = 0;  ///< visible targets without any hit (excluded from the median)

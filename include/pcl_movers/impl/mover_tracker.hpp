@@ -182,8 +182,20 @@ void MoverTracker<PointT>::decideMover(Track& track,
     return;
   }
   track.mover_run = 0;  // restored below when this update passes every test
+  // Free-space evidence is collected from the first fast update on, while the speed votes
+  // accumulate, instead of only once every kinematic test has passed: the two are independent,
+  // and waiting for one before starting the other delayed every confirmation by 1-2 frames.
+  // From the third update only: at the second, the velocity rests on the first association of a
+  // newborn track, whose birth cluster is often merged or partial (KITTI 0000: a track born on a
+  // merged cluster collected two votes at updates 2-3 and latched as a false alarm).
+  if (track.hits >= 3 && !track.fast.empty() && track.fast.back()) {
+    track.free_votes.push_back(freeSpaceEvidence(track, points) ? 1 : 0);
+    while (static_cast<int>(track.free_votes.size()) > p.mover_window) track.free_votes.pop_front();
+  }
   if (track.hits < p.mover_min_age) return;
-  if (track.features.height < p.min_mover_height) return;
+  // The tallest view counts: a cluster's height changes with the view (a van seen from straight
+  // behind showed 0.7-0.9 m and its decision flickered around min_mover_height).
+  if (track.max_height < p.min_mover_height) return;
   int votes = 0;
   for (const char f : track.fast) votes += f;
   if (votes < p.mover_votes) return;
@@ -194,9 +206,7 @@ void MoverTracker<PointT>::decideMover(Track& track,
   const double displacement = (last.template head<2>() - first.template head<2>()).norm();
   if (displacement < p.displacement_ratio * p.mover_speed * elapsed) return;
   // One test can be fooled (a cluster that briefly included something else, a mixed edge);
-  // free_space_votes updates with evidence are needed, within the last mover_window updates.
-  track.free_votes.push_back(freeSpaceEvidence(track, points) ? 1 : 0);
-  while (static_cast<int>(track.free_votes.size()) > p.mover_window) track.free_votes.pop_front();
+  // free_space_votes tests with evidence are needed, within the last mover_window tests.
   int free_votes = 0;
   for (const char f : track.free_votes) free_votes += f;
   if (free_space_map_ && p.free_space_lag > 0 && free_votes < p.free_space_votes) return;
@@ -297,7 +307,11 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
                                 ? 0.5 * std::max(track.features.length, cand.features.length)
                                 : p.gate_margin;
       const double gate = std::min(p.max_gate_radius + margin, search + margin);
-      const double distance = (cand.features.centroid.template head<2>() - predicted).norm();
+      // Centroids are compared with the predicted centroid, not the predicted reference point:
+      // a car first seen head-on at 80 m has its reference point at its front, 1.5-2 m from the
+      // centroid of its side view when it passes (open scene: the track was lost and re-born).
+      const double distance =
+          (cand.features.centroid.template head<2>() - predicted - track.centroid_offset).norm();
       if (distance > gate) continue;
       if (std::abs(cand.features.centroid.z() - track.features.centroid.z()) > 1.5) continue;
       Match m;
@@ -394,6 +408,8 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     t.missed = 0;
     t.similarity = m.similarity;
     t.features = cand.features;
+    t.centroid_offset = (cand.features.centroid - m.measurement).template head<2>();
+    if (!cand.features.large) t.max_height = std::max(t.max_height, cand.features.height);
     // Not latched: a far vehicle merged with a hedge for a while must become a candidate again.
     t.large = cand.features.large;
     {
@@ -427,6 +443,7 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
       t.filter.initialize(cand.features.centroid.template head<2>(),
                           Eigen::Matrix2d::Identity() * meas_sigma * meas_sigma,
                           Eigen::Vector2d::Zero(), p.initial_velocity_sigma);
+      t.centroid_offset.setZero();
       t.z = cand.features.centroid.z();
       t.hits = 1;
       t.fast.assign(1, 0);
@@ -505,6 +522,7 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     t.hits = 1;
     t.features = cand.features;
     t.large = cand.features.large;
+    t.max_height = cand.features.large ? 0.0 : cand.features.height;
     t.fast.push_back(0);
     t.history.emplace_back(cand.features.centroid.x(), cand.features.centroid.y(), time);
     if (use_registration && !t.large && cand.features.height >= 0.5 * p.min_mover_height) {
