@@ -19,7 +19,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>  // TSHACK
 #include <ctime>
 #include <filesystem>
 #include <limits>
@@ -133,7 +132,6 @@ void runTracker(benchmark::State& state, const std::string& mode) {
   }
   pcl_movers::DetectorParameters params;
   params.mode = mode;
-  if (const char* v = std::getenv("TS_STOP")) params.registration_stop_similarity = std::atof(v);  // TSHACK
   const std::size_t n = in.frames.size();
   // Per frame: the fastest of the repetitions (the least disturbed by other processes).
   std::vector<double> cpu_ms(n, std::numeric_limits<double>::max()), registrations(n, 0);

@@ -126,6 +126,8 @@ bool MoverTracker<PointT>::registerCandidate(const Track& track, Candidate& cand
   registration_.setSigmaPerMetre(static_cast<float>(p.sigma_per_metre));
   registration_.setMinSigma(static_cast<float>(p.min_sigma));
   registration_.setMinSimilarity(static_cast<float>(p.min_similarity));
+  // Views are built for the assigned matches only (buildView()).
+  registration_.setComputeSourceDensity(false);
   // The guess moves the predicted reference point onto the model centre; heights stay (objects
   // move on the ground, the grid is 2.8 m tall).
   const Eigen::Vector3f centre = track.model->getCentre();
@@ -143,9 +145,37 @@ bool MoverTracker<PointT>::registerCandidate(const Track& track, Candidate& cand
   match.measurement = ref.template head<3>().template cast<double>();
   match.similarity = similarity;
   match.score = similarity;
-  const auto view = registration_.getSourceDensity();
-  if (view) match.view.reset(new SurfaceDensity(*view));
+  match.transform = T;
+  match.registered = true;
   return true;
+}
+
+template <typename PointT>
+void MoverTracker<PointT>::buildView(const Candidate& candidate, const Eigen::Matrix4f& transform,
+                                     const SurfaceDensity& model,
+                                     const Eigen::Vector3d& sensor_origin) {
+  // As BhattacharyaRegistration builds its source density: σ from the ranges before the motion.
+  const auto& p = parameters_;
+  const Eigen::Vector3f origin = sensor_origin.template cast<float>();
+  const Eigen::Matrix3f r = transform.template topLeftCorner<3, 3>();
+  const Eigen::Vector3f t = transform.template topRightCorner<3, 1>();
+  view_points_.clear();
+  view_sigmas_.clear();
+  for (const auto& q : candidate.points->points) {
+    const Eigen::Vector3f v(q.x, q.y, q.z);
+    if (!v.allFinite()) continue;
+    view_points_.push_back(r * v + t);
+    view_sigmas_.push_back(std::max(static_cast<float>(p.min_sigma),
+                                    static_cast<float>(p.sigma_per_metre) * (v - origin).norm()));
+  }
+  if (view_.getNx() != model.getNx() || view_.getNy() != model.getNy() ||
+      view_.getNz() != model.getNz())
+    view_.setGridSize(model.getNx(), model.getNy(), model.getNz());
+  view_.setResolution(model.getResolution());
+  view_.setResolutionZ(model.getResolutionZ());
+  view_.setSigmaPerMetre(model.getSigmaPerMetre());
+  view_.setMinSigma(model.getMinSigma());
+  view_.computeFromPoints(view_points_, view_sigmas_, model.getCentre());
 }
 
 template <typename PointT>
@@ -404,7 +434,7 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
       r.velocity = t.filter.velocity();
       continue;
     }
-    const bool registered = m.score >= 0 && m.similarity > 0;
+    const bool registered = m.registered;
     t.since_registration = 0;
     // Far objects are sampled coarsely and their densities are wide: their positions are less
     // certain, which keeps a few noisy far measurements from producing a confident velocity.
@@ -452,9 +482,10 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     while (static_cast<int>(t.fast.size()) > p.mover_window) t.fast.pop_front();
     t.history.emplace_back(m.measurement.x(), m.measurement.y(), time);
     while (static_cast<int>(t.history.size()) > p.mover_window + 1) t.history.pop_front();
-    if (registered && m.view && t.model) {
+    if (registered && t.model) {
       try {
-        t.model->accumulate(*m.view, half_life_weight);
+        buildView(cand, m.transform, *t.model, sensor_origin);
+        t.model->accumulate(view_, half_life_weight);
       } catch (const std::exception&) {
         // Grids always match (same parameters); keep the old model if they ever do not.
       }
