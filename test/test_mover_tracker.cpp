@@ -320,3 +320,34 @@ TEST(MoverTracker, StaticTrackThatStartsMovingIsFollowed) {
     EXPECT_EQ(mover_frames, 15) << "paper " << paper;
   }
 }
+
+// Claimed clusters: while a post is hidden, its coasting track does not register the neighbouring
+// post a live track matched well, and it still re-acquires its own post when that reappears.
+TEST(MoverTracker, CoastingStaticTrackSkipsClaimedClustersAndIsReacquired) {
+  std::map<double, int> registrations_hidden;
+  for (const double stop : {0.8, 1.1}) {
+    auto params = defaults();
+    params.registration_stop_similarity = stop;  // > 1: no match counts as a claim
+    params.static_refresh_frames = 1;            // every live track registers every frame
+    Tracker tracker;
+    tracker.setParameters(params);
+    const Eigen::Vector3d sensor(0, 0, 1.7);
+    int id_before = -1, id_after = -1;
+    for (int k = 0; k < 16; ++k) {
+      const bool hidden = k >= 10 && k < 13;
+      SceneBuilder scene;
+      scene.addBox(sensor, Eigen::Vector2d(10, 1.3), 0.0, 0.3, 0.3, 1.5);
+      if (!hidden) scene.addBox(sensor, Eigen::Vector2d(10, 0), 0.0, 0.3, 0.3, 1.5);
+      const auto results = step(tracker, scene, sensor, 0.1 * k);
+      if (hidden) registrations_hidden[stop] += tracker.getRegistrationCount();
+      if (k == 9) id_before = results[1].track_id;
+      if (k == 15) id_after = results[1].track_id;
+    }
+    EXPECT_GE(id_before, 0);
+    EXPECT_EQ(id_before, id_after) << "stop " << stop;
+  }
+  // Both tracks register the visible post in each of the 3 hidden frames; with claims the hidden
+  // post's track does so only in the first (it is not coasting yet: it missed no frame before).
+  EXPECT_EQ(registrations_hidden[1.1], 6);
+  EXPECT_EQ(registrations_hidden[0.8], 4);
+}
