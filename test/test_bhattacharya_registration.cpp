@@ -277,6 +277,51 @@ TEST(BhattacharyaRegistration, TargetDensityAndSourceDensityForAccumulation) {
   EXPECT_GT(pcl_movers::SurfaceDensity::bhattacharyya(*model, *view), reg.getSimilarity());
 }
 
+// Without the source density (setComputeSourceDensity(false), as MoverTracker registers) the
+// motion and B are the same, and the view rebuilt from the final transformation (σ from the
+// ranges before the motion) is the density align() would have returned.
+TEST(BhattacharyaRegistration, SourceDensityCanBeLeftToTheCaller) {
+  const Eigen::Vector3f sensor(0.f, 0.f, 1.73f);
+  auto first = vehicle(18.f, 2.f, 0.1f, sensor, 0.f, 1);
+  auto second = vehicle(18.8f, 2.1f, 0.1f, sensor, 0.5f, 2);
+  auto model = pcl::make_shared<pcl_movers::SurfaceDensity>();
+  Eigen::Vector4f c;
+  pcl::compute3DCentroid(*first, c);
+  model->compute(*first, sensor, c.head<3>());
+  BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ> reg;
+  reg.setTargetDensity(model);
+  reg.setSensorOrigin(sensor);
+  reg.setInputSource(second);
+  pcl::PointCloud<pcl::PointXYZ> out;
+  reg.align(out);
+  ASSERT_TRUE(reg.hasConverged());
+  const Eigen::Matrix4f with_view = reg.getFinalTransformation();
+  const float b_with_view = reg.getSimilarity();
+  const auto view = reg.getSourceDensity();
+  ASSERT_TRUE(view);
+
+  reg.setComputeSourceDensity(false);
+  EXPECT_FALSE(reg.getComputeSourceDensity());
+  reg.align(out);
+  ASSERT_TRUE(reg.hasConverged());
+  EXPECT_FALSE(reg.getSourceDensity());
+  EXPECT_TRUE(reg.getFinalTransformation().isApprox(with_view));
+  EXPECT_FLOAT_EQ(reg.getSimilarity(), b_with_view);
+
+  const Eigen::Matrix4f T = reg.getFinalTransformation();
+  std::vector<Eigen::Vector3f> points;
+  std::vector<float> sigmas;
+  for (const auto& p : second->points) {
+    const Eigen::Vector3f v(p.x, p.y, p.z);
+    points.push_back(T.topLeftCorner<3, 3>() * v + T.topRightCorner<3, 1>());
+    sigmas.push_back(std::max(reg.getMinSigma(), reg.getSigmaPerMetre() * (v - sensor).norm()));
+  }
+  pcl_movers::SurfaceDensity rebuilt(model->getNx(), model->getNy(), model->getNz(),
+                                     model->getResolution(), model->getResolutionZ());
+  rebuilt.computeFromPoints(points, sigmas, model->getCentre());
+  EXPECT_GT(pcl_movers::SurfaceDensity::bhattacharyya(rebuilt, *view), 0.999f);
+}
+
 TEST(BhattacharyaRegistration, MixedPointTypesAndOptions) {
   const Eigen::Vector3f sensor(0.f, 0.f, 1.73f);
   auto t_xyz = vehicle(20.f, 0.f, 0.f, sensor, 0.f, 1);

@@ -279,3 +279,128 @@ TEST(MoverTracker, HeightTestUsesTallestView) {
       EXPECT_EQ(movers, 0);
   }
 }
+
+// Registration scheduling (registration_stop_similarity): two people 2.5 m apart are both inside
+// each other's wide gate while their tracks are young. Nearest first, each track stops after its
+// own person matched, so half the registrations of "register every gated pair" are run; the
+// identities are the same either way.
+TEST(MoverTracker, ConfidentNearestMatchSkipsFartherCandidates) {
+  std::map<double, std::vector<int>> registrations;
+  std::map<double, std::vector<int>> ids;
+  for (const double stop : {0.8, 1.1}) {
+    auto params = defaults();
+    params.registration_stop_similarity = stop;  // > 1: never stop (every gated pair)
+    Tracker tracker;
+    tracker.setParameters(params);
+    const Eigen::Vector3d sensor(0, 0, 1.7);
+    for (int k = 0; k < 3; ++k) {
+      SceneBuilder scene;
+      scene.addBox(sensor, Eigen::Vector2d(10, 0), 0.0, 0.6, 0.6, 1.8);
+      scene.addBox(sensor, Eigen::Vector2d(10, 2.5), 0.0, 0.6, 0.6, 1.8);
+      const auto results = step(tracker, scene, sensor, 0.1 * k);
+      registrations[stop].push_back(tracker.getRegistrationCount());
+      for (const auto& r : results) ids[stop].push_back(r.track_id);
+    }
+  }
+  // Frame 1: the young tracks gate both people.
+  EXPECT_EQ(registrations[1.1][1], 4);
+  EXPECT_EQ(registrations[0.8][1], 2);
+  EXPECT_EQ(ids[0.8], ids[1.1]);
+  EXPECT_EQ(ids[0.8][4], ids[0.8][0]);
+  EXPECT_EQ(ids[0.8][5], ids[0.8][1]);
+}
+
+// The nearest candidate is a different object (a short post where the person stood) and does not
+// match the person's model well: the farther candidate (the person, who stepped aside) is still
+// registered and keeps the person's track.
+TEST(MoverTracker, PoorNearestMatchStillRegistersFartherCandidates) {
+  Tracker tracker;
+  tracker.setParameters(defaults());
+  const Eigen::Vector3d sensor(0, 0, 1.7);
+  int person_id = -1;
+  for (int k = 0; k < 6; ++k) {
+    SceneBuilder scene;
+    scene.addBox(sensor, Eigen::Vector2d(10, 0), 0.0, 0.6, 0.6, 1.8);
+    const auto results = step(tracker, scene, sensor, 0.1 * k);
+    person_id = results[0].track_id;
+  }
+  SceneBuilder scene;
+  scene.addBox(sensor, Eigen::Vector2d(10, 0.45), 0.0, 0.6, 0.6, 1.8);  // the person
+  scene.addBox(sensor, Eigen::Vector2d(10, -0.3), 0.0, 0.2, 0.2, 0.6);  // a post, nearer
+  const auto results = step(tracker, scene, sensor, 0.6);
+  ASSERT_EQ(results.size(), 2u);
+  EXPECT_GE(tracker.getRegistrationCount(), 2);  // the post did not stop the search
+  EXPECT_EQ(results[0].track_id, person_id);
+  EXPECT_NE(results[1].track_id, person_id);
+}
+
+// Cost rules (static refresh, nearest-first stop): a person standing still for 3 s between two
+// posts is registered only now and then; when the person starts walking
+// the same track must follow and become a mover, as when every pair is registered every frame.
+TEST(MoverTracker, StaticTrackThatStartsMovingIsFollowed) {
+  for (const bool paper : {false, true}) {
+    auto params = defaults();
+    if (paper) {
+      params.static_refresh_frames = 1;
+      params.registration_stop_similarity = 1.1;
+    }
+    Tracker tracker;
+    tracker.setParameters(params);
+    const Eigen::Vector3d sensor(0, 0, 1.7);
+    int registrations_still = 0, person_id = -1, mover_frames = 0;
+    std::set<int> ids;
+    for (int k = 0; k < 60; ++k) {
+      const double t = 0.1 * k;
+      const double walked = k < 30 ? 0.0 : 1.5 * (t - 3.0);
+      SceneBuilder scene;
+      scene.addBox(sensor, Eigen::Vector2d(12 + walked, 0), 0.0, 0.6, 0.6, 1.8);
+      scene.addBox(sensor, Eigen::Vector2d(12, 2.5), 0.0, 0.3, 0.3, 1.5);
+      scene.addBox(sensor, Eigen::Vector2d(12, -2.5), 0.0, 0.3, 0.3, 1.5);
+      const auto results = step(tracker, scene, sensor, t);
+      ASSERT_EQ(results.size(), 3u);
+      if (k >= 10 && k < 30) registrations_still += tracker.getRegistrationCount();
+      if (k == 29) person_id = results[0].track_id;
+      if (k >= 29) ids.insert(results[0].track_id);
+      if (k >= 45) mover_frames += results[0].mover;
+    }
+    // Three static tracks over 20 frames: every frame 60 registrations, every 4th 15 and a few.
+    if (!paper)
+      EXPECT_LT(registrations_still, 30) << "paper " << paper;
+    else
+      EXPECT_GE(registrations_still, 60) << "paper " << paper;
+    EXPECT_EQ(ids.size(), 1u) << "paper " << paper;
+    EXPECT_GE(person_id, 0);
+    EXPECT_EQ(mover_frames, 15) << "paper " << paper;
+  }
+}
+
+// Claimed clusters: while a post is hidden, its coasting track does not register the neighbouring
+// post a live track matched well, and it still re-acquires its own post when that reappears.
+TEST(MoverTracker, CoastingStaticTrackSkipsClaimedClustersAndIsReacquired) {
+  std::map<double, int> registrations_hidden;
+  for (const double stop : {0.8, 1.1}) {
+    auto params = defaults();
+    params.registration_stop_similarity = stop;  // > 1: no match counts as a claim
+    params.static_refresh_frames = 1;            // every live track registers every frame
+    Tracker tracker;
+    tracker.setParameters(params);
+    const Eigen::Vector3d sensor(0, 0, 1.7);
+    int id_before = -1, id_after = -1;
+    for (int k = 0; k < 16; ++k) {
+      const bool hidden = k >= 10 && k < 13;
+      SceneBuilder scene;
+      scene.addBox(sensor, Eigen::Vector2d(10, 1.3), 0.0, 0.3, 0.3, 1.5);
+      if (!hidden) scene.addBox(sensor, Eigen::Vector2d(10, 0), 0.0, 0.3, 0.3, 1.5);
+      const auto results = step(tracker, scene, sensor, 0.1 * k);
+      if (hidden) registrations_hidden[stop] += tracker.getRegistrationCount();
+      if (k == 9) id_before = results[1].track_id;
+      if (k == 15) id_after = results[1].track_id;
+    }
+    EXPECT_GE(id_before, 0);
+    EXPECT_EQ(id_before, id_after) << "stop " << stop;
+  }
+  // Both tracks register the visible post in each of the 3 hidden frames; with claims the hidden
+  // post's track does so only in the first (it is not coasting yet: it missed no frame before).
+  EXPECT_EQ(registrations_hidden[1.1], 6);
+  EXPECT_EQ(registrations_hidden[0.8], 4);
+}

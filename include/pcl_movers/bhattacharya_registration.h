@@ -113,6 +113,13 @@ class BhattacharyaRegistration : public pcl::Registration<PointSource, PointTarg
    * with an empty source. */
   SurfaceDensity::ConstPtr getSourceDensity() const { return source_density_; }
 
+  /** \brief Whether align() builds getSourceDensity() (default true). A caller that registers
+   * many candidates and accumulates only the few it keeps (MoverTracker) switches it off and
+   * builds those views itself from getFinalTransformation(): the full-grid density is a large
+   * part of a registration's cost. getSourceDensity() is then null after align(). */
+  void setComputeSourceDensity(bool compute) { compute_source_density_ = compute; }
+  bool getComputeSourceDensity() const { return compute_source_density_; }
+
   /** \brief B at the optimum of the last align(), in [0,1] (1 for identical densities). */
   float getSimilarity() const { return similarity_; }
 
@@ -268,6 +275,7 @@ class BhattacharyaRegistration : public pcl::Registration<PointSource, PointTarg
   float min_similarity_ = 0.2f;
   bool search_z_ = false;
   bool full_yaw_window_ = false;
+  bool compute_source_density_ = true;
   float search_radius_z_ = 0.4f;
   Eigen::Vector3f sensor_origin_ = Eigen::Vector3f::Zero();
   bool use_sensor_origin_ = false;

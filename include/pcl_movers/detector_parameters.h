@@ -94,6 +94,9 @@ struct DetectorParameters {
   int static_refresh_frames = 4;
   /// Largest centroid shift [m] of such a candidate that counts as "still".
   double static_shift = 0.15;
+  /// A track's gated candidates are registered nearest centroid first; once one reaches this
+  /// similarity the farther ones are skipped (cost control; > 1 registers them all, the paper's).
+  double registration_stop_similarity = 0.8;
   /// Velocity σ of a newborn track [m/s] (its velocity is unknown).
   double initial_velocity_sigma = 6.0;
   /// Gate: Mahalanobis distance bound of candidate centroids (chi²(2) 99 % ≈ 3.03).
@@ -207,6 +210,8 @@ void DetectorParameters::forEachParameter(F&& f) {
     "position sigma per metre of range");
   f("static_refresh_frames", static_refresh_frames, "register still static tracks every N frames");
   f("static_shift", static_shift, "max centroid shift of a still static track [m]");
+  f("registration_stop_similarity", registration_stop_similarity,
+    "skip farther candidates of a track after a registration this good");
   f("initial_velocity_sigma", initial_velocity_sigma, "velocity sigma of a new track [m/s]");
   f("gate_sigmas", gate_sigmas, "gate: Mahalanobis bound");
   f("gate_margin", gate_margin, "gate: extra radius for centroid shifts [m]");
@@ -334,6 +339,7 @@ inline void DetectorParameters::validate() const {
   positive("acceleration_limit", acceleration_limit);
   positive("registration_sigma", registration_sigma);
   positive("centroid_sigma", centroid_sigma);
+  positive("registration_stop_similarity", registration_stop_similarity);
   positive("initial_velocity_sigma", initial_velocity_sigma);
   positive("gate_sigmas", gate_sigmas);
   positive("max_gate_radius", max_gate_radius);

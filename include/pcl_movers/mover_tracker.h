@@ -184,14 +184,23 @@ class MoverTracker {
     std::size_t track = 0, cluster = 0;
     Eigen::Vector3d measurement = Eigen::Vector3d::Zero();
     double similarity = 0;
-    SurfaceDensity::ConstPtr view;  ///< registered view for model accumulation
-    bool cheap = false;             ///< static track seen without registration
+    /// Registered motion (cluster → model), from which the view accumulated into the model is
+    /// built once the match is assigned (most registered pairs are not).
+    Eigen::Matrix<float, 4, 4, Eigen::DontAlign> transform =
+        Eigen::Matrix<float, 4, 4, Eigen::DontAlign>::Identity();
+    bool registered = false;
+    bool cheap = false;  ///< static track seen without registration
   };
 
   /** \brief Registers candidate `c` against track `t`'s model around the predicted position. Fills
    * the measurement (reference point) and similarity; false when registration found no match. */
   bool registerCandidate(const Track& track, Candidate& candidate, const Eigen::Vector2d& predicted,
                          double search_radius, const Eigen::Vector3d& sensor_origin, Match& match);
+
+  /** \brief Builds into view_ the density of the candidate's points moved by `transform` on the
+   * grid of `model` (what the registration would give as its source density). */
+  void buildView(const Candidate& candidate, const Eigen::Matrix4f& transform,
+                 const SurfaceDensity& model, const Eigen::Vector3d& sensor_origin);
 
   /** \brief Builds a track's first model from its birth cluster. */
   SurfaceDensity::Ptr makeModel(const Candidate& candidate,
@@ -218,6 +227,10 @@ class MoverTracker {
   bool has_time_ = false;
   double last_time_ = 0;
   BhattacharyaRegistration<PointT, PointT> registration_;
+  /// Buffers of buildView(), reused between calls.
+  SurfaceDensity view_;
+  std::vector<Eigen::Vector3f> view_points_;
+  std::vector<float> view_sigmas_;
   const FreeSpaceMap* free_space_map_ = nullptr;
 };
 

@@ -589,8 +589,8 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::search(
   converged_ = !on_edge && similarity_ >= min_similarity_;
 
   // Source density on the target grid after the final motion, for model accumulation. The
-  // object is reused while nobody else holds it (the tracker copies it): no allocation per call.
-  {
+  // object is reused while nobody else holds it: no allocation per call.
+  if (compute_source_density_) {
     const Eigen::Matrix3f r = motion.linear();
     const Eigen::Vector3f t = motion.translation();
     for (std::size_t i = 0; i < points.size(); ++i) turned[i] = r * points[i] + t;
