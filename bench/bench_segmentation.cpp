@@ -254,12 +254,23 @@ BENCHMARK(BM_Segment_RangeImageRegionGrowing)->Unit(benchmark::kMillisecond);
 void BM_Segment_RangeImageRegionGrowing_NoGap(benchmark::State& state) {
   pcl_movers::RangeImageRegionGrowing<Point> rg;
   rg.setMaxGap(0);  // the paper's strict 8-neighbour rule
+  rg.setBridgeLength(0.f);
   runSegment(state, [&](const Frame& fr, std::vector<pcl::PointIndices>& clusters) {
     rg.setInputCloud(fr.non_ground);
     rg.segment(clusters);
   });
 }
 BENCHMARK(BM_Segment_RangeImageRegionGrowing_NoGap)->Unit(benchmark::kMillisecond);
+
+void BM_Segment_RangeImageRegionGrowing_NoBridge(benchmark::State& state) {
+  pcl_movers::RangeImageRegionGrowing<Point> rg;
+  rg.setBridgeLength(0.f);  // empty-cell gaps only: what the row bridge costs and buys
+  runSegment(state, [&](const Frame& fr, std::vector<pcl::PointIndices>& clusters) {
+    rg.setInputCloud(fr.non_ground);
+    rg.segment(clusters);
+  });
+}
+BENCHMARK(BM_Segment_RangeImageRegionGrowing_NoBridge)->Unit(benchmark::kMillisecond);
 
 void BM_Segment_EuclideanClusterExtraction(benchmark::State& state) {
   std::vector<pcl::PointIndices> dense;

@@ -61,8 +61,9 @@ for key, label in g:
     b = rows.get(key)
     if b:
         print(f"| ground | {label} | {fmt(ms(key))} | precision {b['precision_pct']:.1f} %, recall {b['recall_pct']:.1f} % |")
-s = [("BM_Segment_RangeImageRegionGrowing", "pcl_movers::RangeImageRegionGrowing (k = 0.03, gap 2)"),
-     ("BM_Segment_RangeImageRegionGrowing_NoGap", "pcl_movers::RangeImageRegionGrowing, strict 8-neighbours (gap 0)"),
+s = [("BM_Segment_RangeImageRegionGrowing", "pcl_movers::RangeImageRegionGrowing (k = 0.03, gap 2, row bridge 0.5 m)"),
+     ("BM_Segment_RangeImageRegionGrowing_NoBridge", "pcl_movers::RangeImageRegionGrowing, no row bridge (gap 2)"),
+     ("BM_Segment_RangeImageRegionGrowing_NoGap", "pcl_movers::RangeImageRegionGrowing, strict 8-neighbours (gap 0, no bridge)"),
      ("BM_Segment_EuclideanClusterExtraction", "pcl::EuclideanClusterExtraction (0.5 m, kd-tree built per frame)"),
      ("BM_Segment_OrganizedConnectedComponents", "pcl::OrganizedConnectedComponentSegmentation + EuclideanClusterComparator (0.5 m)"),
      ("BM_Pipeline_GroundAndRegionGrowing", "ground + segmentation (GroundPlaneFilter indices into RangeImageRegionGrowing)")]
