@@ -50,6 +50,7 @@ struct Options {
   float k = pcl_movers::RangeImageRegionGrowing<Point>().getDepthThresholdFactor();
   float floor = pcl_movers::RangeImageRegionGrowing<Point>().getMinDepthThreshold();
   int gap = pcl_movers::RangeImageRegionGrowing<Point>().getMaxGap();
+  float bridge = pcl_movers::RangeImageRegionGrowing<Point>().getBridgeLength();
   // scoring
   int min_points = 30;
   float min_fraction = 0.8f;
@@ -95,15 +96,17 @@ void printHelp(const char* argv0) {
       "  --k F              depth threshold factor: neighbours join if |dr| <= F * range (default "
       "%g)\n"
       "  --floor M          absolute floor of the depth threshold (default %g)\n"
-      "  --gap N            empty cells bridged between neighbours (default %d)\n\n"
+      "  --gap N            empty cells bridged between neighbours (default %d)\n"
+      "  --bridge M         longest gap bridged along a row, past empty and nearer cells (default "
+      "%g)\n\n"
       "Scoring:\n"
       "  --min-points N     smallest scored instance (default %d)\n"
       "  --min-fraction F   share of an instance one cluster must hold (default %g)\n"
       "  --per-frame        also print ground precision/recall of every frame\n"
       "  -h, --help         this help\n",
       argv0, d.sensor.c_str(), d.distance, d.tilt_deg, d.sensor_height, d.sectors,
-      d.local_slope_deg, d.range_noise, d.slope_band, d.baseline, d.k, d.floor, d.gap, d.min_points,
-      d.min_fraction);
+      d.local_slope_deg, d.range_noise, d.slope_band, d.baseline, d.k, d.floor, d.gap, d.bridge,
+      d.min_points, d.min_fraction);
 }
 
 using pcl_movers::tools::parseNumber;
@@ -268,6 +271,7 @@ void scoreFrame(const Frame& frame, const Options& opt, Result& result) {
   rg.setDepthThresholdFactor(opt.k);
   rg.setMinDepthThreshold(opt.floor);
   rg.setMaxGap(opt.gap);
+  rg.setBridgeLength(opt.bridge);
   rg.setWrapAround(pcl_movers::SensorModel::fromName(opt.sensor).isFullRevolution());
   rg.setInputCloud(image);
   std::vector<pcl::PointIndices> clusters;
@@ -325,7 +329,7 @@ int run(int argc, char** argv) {
       "--kitti",       "--sequence",      "--frames",     "--sensor",       "--distance",
       "--tilt-deg",    "--sensor-height", "--sectors",    "--baseline",     "--k",
       "--floor",       "--gap",           "--min-points", "--min-fraction", "--local-slope-deg",
-      "--range-noise", "--slope-band"};
+      "--range-noise", "--slope-band",    "--bridge"};
   pcl_movers::tools::checkArguments(argc, argv, {"-h", "--help", "--no-local-slope", "--per-frame"},
                                     with_value);
   const auto positional = pcl_movers::tools::positionalArguments(argc, argv, with_value);
@@ -360,6 +364,8 @@ int run(int argc, char** argv) {
   if (pcl::console::parse_argument(argc, argv, "--floor", v) >= 0)
     opt.floor = nonNegative("--floor", v);
   if (pcl::console::parse_argument(argc, argv, "--gap", v) >= 0) opt.gap = integer("--gap", v, 0);
+  if (pcl::console::parse_argument(argc, argv, "--bridge", v) >= 0)
+    opt.bridge = nonNegative("--bridge", v);
   if (pcl::console::parse_argument(argc, argv, "--min-points", v) >= 0)
     opt.min_points = integer("--min-points", v, 1);
   if (pcl::console::parse_argument(argc, argv, "--min-fraction", v) >= 0) {
@@ -406,10 +412,11 @@ int run(int argc, char** argv) {
   std::printf(
       "Ground: GroundPlaneFilter on the range image (distance %g m, tilt %.1f°, %d sectors, %s) "
       "vs. a height threshold z < %g m. Objects: ground removed, RangeImageRegionGrowing (k = %g, "
-      "floor %g m, gap %d); instances with >= %d points, recovered = one cluster holds >= %g %% "
+      "floor %g m, gap %d, row bridge %g m); instances with >= %d points, recovered = one cluster "
+      "holds >= %g %% "
       "of them.\n\n",
       opt.distance, opt.tilt_deg, opt.sectors, slope_text, -opt.sensor_height + opt.baseline, opt.k,
-      opt.floor, opt.gap, opt.min_points, 100.0 * opt.min_fraction);
+      opt.floor, opt.gap, opt.bridge, opt.min_points, 100.0 * opt.min_fraction);
   std::printf(
       "| data | frames | ground precision | ground recall | baseline precision | baseline recall "
       "|\n|---|---|---|---|---|---|\n");

@@ -240,6 +240,60 @@ void BM_Ground_SACSegmentation_ExtractIndices(benchmark::State& state) {
 }
 BENCHMARK(BM_Ground_SACSegmentation_ExtractIndices)->Unit(benchmark::kMillisecond);
 
+// ---------------------------------------------------- ground removal as MoverDetector runs it
+
+/** The first 20 frames of kitti-tracking-0000-a organized as MoverDetector does (HDL-64E model);
+ * empty when the data is missing. */
+const std::vector<Cloud::Ptr>& trackingImages() {
+  static const std::vector<Cloud::Ptr> loaded = [] {
+    std::vector<Cloud::Ptr> out;
+    const std::string folder = std::string(PCL_MOVERS_SHARED_DATA) + "/kitti-tracking-0000-a";
+    if (!std::filesystem::is_directory(folder)) return out;
+    pcl_movers::io::SequenceReader reader(folder);
+    for (std::size_t i = 0; i < reader.size() && i < 20; ++i) {
+      Cloud::Ptr scan(new Cloud);
+      reader.read(i, *scan);
+      scan->sensor_origin_.setZero();
+      pcl_movers::RangeImageOrganizer<Point> organizer;
+      organizer.setSensorModel(pcl_movers::SensorModel::hdl64());
+      organizer.setInputCloud(scan);
+      Cloud::Ptr image(new Cloud);
+      organizer.organize(*image);
+      out.push_back(image);
+    }
+    return out;
+  }();
+  return loaded;
+}
+
+/** MoverDetector's ground settings (DetectorParameters defaults: 0.25 m, 15°, plane test only). */
+void configureAsDetector(pcl_movers::GroundPlaneFilter<Point>& filter) {
+  filter.setDistanceThreshold(0.25f);
+  filter.setMaxTilt(15.f * static_cast<float>(M_PI) / 180.f);
+  filter.setLocalSlopeCheck(false);
+}
+
+/** The ground stage of MoverDetector on real frames, with the detector's settings. */
+void BM_Ground_DetectorSettings_Tracking0000(benchmark::State& state) {
+  const auto& images = trackingImages();
+  if (images.empty()) {
+    state.SkipWithError("kitti-tracking-0000-a not found under " PCL_MOVERS_SHARED_DATA);
+    return;
+  }
+  pcl_movers::GroundPlaneFilter<Point> filter;
+  configureAsDetector(filter);
+  pcl::IndicesPtr objects(new pcl::Indices);
+  std::size_t f = 0;
+  for (auto _ : state) {
+    filter.setInputCloud(images[f]);
+    filter.filter(*objects);
+    benchmark::DoNotOptimize(objects->data());
+    f = (f + 1) % images.size();
+  }
+  state.counters["columns"] = images.front()->width;
+}
+BENCHMARK(BM_Ground_DetectorSettings_Tracking0000)->Unit(benchmark::kMillisecond);
+
 // -------------------------------------------------------------------------------- segmentation
 
 void BM_Segment_RangeImageRegionGrowing(benchmark::State& state) {
@@ -254,12 +308,23 @@ BENCHMARK(BM_Segment_RangeImageRegionGrowing)->Unit(benchmark::kMillisecond);
 void BM_Segment_RangeImageRegionGrowing_NoGap(benchmark::State& state) {
   pcl_movers::RangeImageRegionGrowing<Point> rg;
   rg.setMaxGap(0);  // the paper's strict 8-neighbour rule
+  rg.setBridgeLength(0.f);
   runSegment(state, [&](const Frame& fr, std::vector<pcl::PointIndices>& clusters) {
     rg.setInputCloud(fr.non_ground);
     rg.segment(clusters);
   });
 }
 BENCHMARK(BM_Segment_RangeImageRegionGrowing_NoGap)->Unit(benchmark::kMillisecond);
+
+void BM_Segment_RangeImageRegionGrowing_NoBridge(benchmark::State& state) {
+  pcl_movers::RangeImageRegionGrowing<Point> rg;
+  rg.setBridgeLength(0.f);  // empty-cell gaps only: what the row bridge costs and buys
+  runSegment(state, [&](const Frame& fr, std::vector<pcl::PointIndices>& clusters) {
+    rg.setInputCloud(fr.non_ground);
+    rg.segment(clusters);
+  });
+}
+BENCHMARK(BM_Segment_RangeImageRegionGrowing_NoBridge)->Unit(benchmark::kMillisecond);
 
 void BM_Segment_EuclideanClusterExtraction(benchmark::State& state) {
   std::vector<pcl::PointIndices> dense;

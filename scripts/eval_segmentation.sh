@@ -93,12 +93,14 @@ fi
 
 if [[ -f "$kitti/labels/000000.label" ]]; then
   echo
-  echo "Sensitivity on KITTI (frames 0-2) to the segmentation parameters (defaults: k = 0.03, gap 2)"
+  echo "Sensitivity on KITTI (frames 0-2) to the segmentation parameters (defaults: k = 0.03, gap 2,"
+  echo "row bridge 0.5 m)"
   echo "and the ground distance threshold (default 0.1 m):"
   echo
   echo "| setting | ground precision | ground recall | recovered | not merged | over-segmented | merged |"
   echo "|---|---|---|---|---|---|---|"
-  for setting in "--k 0.02" "--k 0.05" "--gap 0" "--gap 3" "--distance 0.15" "--distance 0.2"; do
+  for setting in "--k 0.02" "--k 0.05" "--gap 0" "--gap 3" "--bridge 0" "--bridge 0.3" "--bridge 1" \
+    "--distance 0.15" "--distance 0.2"; do
     # shellcheck disable=SC2086
     out=$("$eval_bin" --kitti "$kitti" $setting 2>/dev/null)
     g=$(echo "$out" | grep '^| kitti' | sed -n 1p | awk -F'|' '{print $4 "|" $5}')

@@ -240,6 +240,41 @@ TEST(GroundPlaneFilter, AGlobalThresholdFailsOnTheRamp) {
   EXPECT_LT(score(scene, ground).recall, 0.9);
 }
 
+TEST(GroundPlaneFilter, CellPlanesFitATiltedRoadThroughClutter) {
+  // A 4 % road slope (2.3°, within the tilt limit) where a third of the points are clutter 0.3 to
+  // 0.5 m above the road (within the 0.5 m step band, so they are plane candidates): a plain
+  // least-squares plane would sit ~0.13 m above the road and call it non-ground; the RANSAC must
+  // ignore the clutter, so the road stays ground and every fitted plane has the road's slope
+  // (within 3°: 2 cm noise on the smallest cells).
+  auto z_of = [](float x, float) { return -kSensorHeight + 0.04f * x; };
+  Scene scene = makeGround(z_of, 5);
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<float> lift(0.3f, 0.5f);
+  std::bernoulli_distribution clutter(0.33);
+  for (std::size_t i = 0; i < scene.cloud->size(); ++i)
+    if (clutter(rng)) {
+      (*scene.cloud)[i].z += lift(rng);
+      scene.is_ground[i] = 0;
+    }
+  GroundPlaneFilter<pcl::PointXYZ> filter;
+  filter.setInputCloud(scene.cloud);
+  filter.setNegative(true);
+  pcl::Indices ground;
+  filter.filter(ground);
+  const Score s = score(scene, ground);
+  EXPECT_GT(s.precision, 0.99);
+  EXPECT_GT(s.recall, 0.98);
+  const Eigen::Vector3f road = Eigen::Vector3f(-0.04f, 0.f, 1.f).normalized();
+  int fitted = 0;
+  for (std::size_t c = 0; c < filter.getCellPlanes().size(); ++c) {
+    if (!filter.getCellFitted()[c]) continue;
+    ++fitted;
+    EXPECT_GT(filter.getCellPlanes()[c].normal.dot(road), std::cos(3.f * float(M_PI) / 180.f))
+        << "cell " << c;
+  }
+  EXPECT_GT(fitted, static_cast<int>(filter.getCellPlanes().size()) / 2);
+}
+
 // ------------------------------------------------------------- local-slope test (organized)
 
 TEST(GroundPlaneFilter, RoughLowBushIsNotGround) {

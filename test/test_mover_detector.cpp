@@ -66,6 +66,11 @@ TEST(MoverDetector, RejectsBadParameters) {
   params = pcl_movers::DetectorParameters();
   params.mover_votes = params.mover_window + 1;
   EXPECT_THROW(detector.setParameters(params), pcl_movers::InputError);
+  params = pcl_movers::DetectorParameters();
+  params.row_bridge = -0.1;
+  EXPECT_THROW(detector.setParameters(params), pcl_movers::InputError);
+  params.row_bridge = 0.5;
+  EXPECT_NO_THROW(detector.setParameters(params));
 }
 
 TEST(DetectorParameters, ConfigRoundTripAndErrors) {

@@ -59,13 +59,16 @@ Cloud::Ptr rayCast(const std::vector<Box>& boxes, int rows = 32, int columns = 7
   return cloud;
 }
 
+/** Region growing with the given rules; the row bridge is off unless asked for, so the tests of
+ * the 8-neighbour and gap rules see those rules alone. */
 std::vector<pcl::PointIndices> segment(const Cloud::Ptr& cloud, float k = 0.05f, bool wrap = true,
-                                       int gap = 2) {
+                                       int gap = 2, float bridge = 0.f) {
   RangeImageRegionGrowing<pcl::PointXYZ> rg;
   rg.setInputCloud(cloud);
   rg.setDepthThresholdFactor(k);
   rg.setWrapAround(wrap);
   rg.setMaxGap(gap);
+  rg.setBridgeLength(bridge);
   std::vector<pcl::PointIndices> clusters;
   rg.segment(clusters);
   return clusters;
@@ -155,6 +158,57 @@ TEST(RangeImageRegionGrowing, GapBridgingOverEmptyCells) {
   ASSERT_EQ(blanked, 2);
   EXPECT_EQ(segment(cloud, 0.05f, true, 0).size(), 2u);  // the paper's strict rule splits it
   EXPECT_EQ(segment(cloud, 0.05f, true, 2).size(), 1u);  // bridging two empty cells joins it
+}
+
+/** Number of clusters with at least `min_points` points among `clusters` holding any point of
+ * `box`. */
+std::size_t clustersIn(const std::vector<pcl::PointIndices>& clusters, const Cloud& cloud,
+                       const Box& box) {
+  std::size_t n = 0;
+  for (const auto& c : clusters)
+    for (const auto i : c.indices) {
+      const Eigen::Vector3f p = cloud[i].getVector3fMap();
+      if ((p.array() >= box.min.array() - 1e-3f).all() &&
+          (p.array() <= box.max.array() + 1e-3f).all()) {
+        ++n;
+        break;
+      }
+    }
+  return n;
+}
+
+TEST(RangeImageRegionGrowing, RowBridgeJoinsACarBehindAPole) {
+  // A car at 10 m with a 15 cm pole at 6 m in front of it: the pole's cells are nearer, so the
+  // strict rule (and the empty-cell gap) cut the car in two. The row bridge looks past them.
+  const Box car{{10.f, -2.f, -1.f}, {11.5f, 2.f, 0.5f}};
+  const Box pole{{6.f, -0.075f, -1.f}, {6.15f, 0.075f, 1.f}};
+  const auto cloud = rayCast({car, pole});
+  EXPECT_EQ(clustersIn(segment(cloud, 0.05f, true, 2, 0.f), *cloud, car), 2u);
+  const auto bridged = segment(cloud, 0.05f, true, 2, 0.5f);
+  EXPECT_EQ(clustersIn(bridged, *cloud, car), 1u);
+  EXPECT_EQ(clustersIn(bridged, *cloud, pole), 1u);
+  EXPECT_EQ(bridged.size(), 2u);  // the pole stays its own object
+  // A wide occluder (1 m at 5 m hides 2 m of the car) is more than the bridge: two pieces.
+  const Box wall{{5.f, -0.5f, -1.f}, {5.3f, 0.5f, 1.f}};
+  const auto hidden = rayCast({car, wall});
+  EXPECT_EQ(clustersIn(segment(hidden, 0.05f, true, 2, 0.5f), *hidden, car), 2u);
+}
+
+TEST(RangeImageRegionGrowing, RowBridgeStopsAtBackground) {
+  // Two boxes at 10 m, 0.3 m apart sideways. With nothing behind them the gap is empty and within
+  // the bridge: one cluster (as Euclidean clustering at 0.5 m). With a wall behind, the gap shows
+  // a farther surface, which ends the search: two objects.
+  const Box left{{10.f, -1.3f, -1.f}, {11.f, -0.15f, 0.5f}};
+  const Box right{{10.f, 0.15f, -1.f}, {11.f, 1.3f, 0.5f}};
+  const Box wall{{16.f, -5.f, -5.f}, {16.5f, 5.f, 2.f}};  // fills the gap in every row
+  const auto open = rayCast({left, right});
+  EXPECT_EQ(segment(open, 0.05f, true, 2, 0.f).size(), 2u);
+  EXPECT_EQ(segment(open, 0.05f, true, 2, 0.5f).size(), 1u);
+  const auto walled = rayCast({left, right, wall});
+  const auto clusters = segment(walled, 0.05f, true, 2, 0.5f);
+  EXPECT_EQ(clustersIn(clusters, *walled, left), 1u);
+  EXPECT_EQ(clustersIn(clusters, *walled, right), 1u);
+  EXPECT_EQ(clusters.size(), 3u);
 }
 
 TEST(RangeImageRegionGrowing, ClusterSizeLimits) {

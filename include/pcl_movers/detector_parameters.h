@@ -45,6 +45,11 @@ struct DetectorParameters {
   double depth_min = 0.1;
   /// Empty range-image cells bridged by region growing in each direction (0 = strict 8-neighbour).
   int max_gap = 2;
+  /// Longest gap bridged along a range-image row past empty and nearer cells [m]
+  /// (RangeImageRegionGrowing::setBridgeLength; 0 = off). Off in the detector: 0.5 recovers more
+  /// SemanticKITTI objects (92.9 -> 96.5 %) but lowered the mean hit rate on simulated urban by
+  /// 1.6 points (a cyclist joined to its surroundings), and KITTI 0000 did not change.
+  double row_bridge = 0.0;
   /// Clusters with fewer points are ignored (noise, too small to track).
   int min_cluster_points = 12;
   /// Clusters further than this from the sensor are ignored [m] (too sparse to register).
@@ -187,6 +192,7 @@ void DetectorParameters::forEachParameter(F&& f) {
   f("depth_ratio", depth_ratio, "region growing depth threshold d_T / range");
   f("depth_min", depth_min, "lower bound of d_T [m]");
   f("max_gap", max_gap, "empty range-image cells bridged by region growing");
+  f("row_bridge", row_bridge, "gap bridged along a row past empty and nearer cells [m], 0 = off");
   f("min_cluster_points", min_cluster_points, "clusters with fewer points are ignored");
   f("max_range", max_range, "clusters further than this are ignored [m]");
   f("density_resolution", density_resolution, "density grid cell size in x/y [m]");
@@ -325,6 +331,7 @@ inline void DetectorParameters::validate() const {
   positive("sensor_height", sensor_height);
   positive("ground_distance", ground_distance);
   positive("depth_ratio", depth_ratio);
+  if (!(row_bridge >= 0)) throw InputError("parameter row_bridge must be >= 0");
   positive("max_range", max_range);
   positive("density_resolution", density_resolution);
   positive("density_resolution_z", density_resolution_z);

@@ -6,8 +6,6 @@
 #include <pcl/filters/filter_indices.h>
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
-#include <pcl/sample_consensus/ransac.h>
-#include <pcl/sample_consensus/sac_model_perpendicular_plane.h>
 
 #include <cstdint>
 #include <vector>
@@ -21,10 +19,13 @@ namespace pcl_movers {
  * The ground around the sensor is cut into polar cells: `getNumSectors()` equal azimuth sectors
  * times rings whose radial size grows with range (`setRingEdges()`), because a spinning LiDAR's
  * point density falls with the square of range — near cells would otherwise hold thousands of
- * points and far ones a handful. In every cell a plane is fitted with PCL's sample consensus
- * (pcl::SampleConsensusModelPerpendicularPlane with axis z and `getMaxTilt()` as angle limit,
- * pcl::RandomSampleConsensus on an evenly strided subsample of at most `getMaxSamples()` points,
- * then a least-squares refit on the inliers). Cells are processed from the sensor outwards; each
+ * points and far ones a handful. In every cell a plane is fitted by RANSAC (the hypotheses of
+ * pcl::SampleConsensusModelPerpendicularPlane: planes within `getMaxTilt()` of horizontal; the
+ * adaptive stop of pcl::RandomSampleConsensus at probability 0.99) on an evenly strided subsample
+ * of at most `getMaxSamples()` points, then a least-squares refit on the inliers. The RANSAC is
+ * written out on flat coordinate arrays rather than run through PCL's classes: the per-hypothesis
+ * overhead of those (model object, angle via acos, OpenMP critical sections) was half the
+ * filter's time on 512 small cells per frame. Cells are processed from the sensor outwards; each
  * cell only considers points near the plane of its inner neighbour (the "prior"), so a car roof or
  * a table-top cannot be mistaken for the road, and a cell whose fit fails (too few points, too
  * steep, a jump of more than `getMaxStep()` from the prior) inherits the prior. The innermost ring
@@ -62,9 +63,8 @@ namespace pcl_movers {
  *  - `getRemovedIndices()` works when the filter was built with `extract_removed_indices = true`.
  *  - Only the points in `indices_` (setIndices) are considered.
  *
- * Sampling is deterministic: PCL's sample-consensus models are created with `random = false`
- * (fixed seed) and cells are always visited in the same order, so the same input gives the same
- * output.
+ * Sampling is deterministic: every cell draws its RANSAC samples from a fixed seed derived from
+ * the cell's number, so the same input gives the same output.
  */
 template <typename PointT>
 class GroundPlaneFilter : public pcl::FilterIndices<PointT> {
@@ -176,14 +176,11 @@ class GroundPlaneFilter : public pcl::FilterIndices<PointT> {
   /** \brief Fills `indices` with the non-ground (or, when negative, ground) points. */
   void applyFilter(pcl::Indices& indices) override;
 
-  using SacModel = pcl::SampleConsensusModelPerpendicularPlane<PointT>;
-  using SacModelPtr = typename SacModel::Ptr;
-
-  /** \brief Fits one cell's plane to `candidates` (RANSAC + least squares); false when the fit
-   * fails or is too steep or too far from `prior` (more than `band` at `centre`). */
-  bool fitPlane(const pcl::Indices& candidates, const Plane& prior, float band,
-                const Eigen::Vector2f& centre, SacModelPtr& model,
-                pcl::RandomSampleConsensus<PointT>& ransac, Plane& fitted);
+  /** \brief Fits one cell's plane to the candidate points `positions` (into the cell-ordered
+   * coordinates) by RANSAC with the random sequence `seed`, then least squares; false when the
+   * fit fails or is too steep or too far from `prior` (more than `band` at `centre`). */
+  bool fitPlane(const std::vector<int>& positions, const Plane& prior, float band,
+                const Eigen::Vector2f& centre, std::uint32_t seed, Plane& fitted);
 
   /** \brief Ring of a horizontal distance r (binary search over ring_edges_). */
   int ringOf(float r) const;
@@ -212,8 +209,8 @@ class GroundPlaneFilter : public pcl::FilterIndices<PointT> {
   std::vector<Eigen::Vector3f> cell_xyz_;
   std::vector<float> height_;  ///< per point of the input: height above its plane, NaN if unused
   std::vector<std::uint8_t> steep_;  ///< per point: the local-slope test flagged it
-  pcl::IndicesPtr sample_;           ///< RANSAC subsample of the current cell
-  pcl::Indices inliers_;             ///< inliers of the current cell's plane
+  std::vector<int> positions_;       ///< candidates of the current cell (into cell_xyz_)
+  std::vector<float> sample_x_, sample_y_, sample_z_;  ///< RANSAC subsample, flat per axis
 };
 
 }  // namespace pcl_movers

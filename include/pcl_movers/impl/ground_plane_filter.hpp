@@ -5,8 +5,7 @@
 
 #include <pcl_movers/ground_plane_filter.h>
 
-#include <pcl/sample_consensus/ransac.h>
-#include <pcl/sample_consensus/sac_model_perpendicular_plane.h>
+#include <pcl/common/eigen.h>
 
 #include <algorithm>
 #include <cmath>
@@ -53,52 +52,110 @@ int GroundPlaneFilter<PointT>::ringOf(float r) const {
 }
 
 template <typename PointT>
-bool GroundPlaneFilter<PointT>::fitPlane(const pcl::Indices& candidates, const Plane& prior,
+bool GroundPlaneFilter<PointT>::fitPlane(const std::vector<int>& positions, const Plane& prior,
                                          float band, const Eigen::Vector2f& centre,
-                                         SacModelPtr& model,
-                                         pcl::RandomSampleConsensus<PointT>& ransac,
-                                         Plane& fitted) {
+                                         std::uint32_t seed, Plane& fitted) {
   // RANSAC on an evenly strided subsample: the inlier ratio is high, so a few dozen points and
-  // iterations find the plane; the refit below uses every inlier of the subsample.
+  // iterations find the plane; the refit below uses every inlier of the subsample. The subsample
+  // is copied into three flat arrays so the inlier count of a hypothesis is one vectorizable loop
+  // (pcl::RandomSampleConsensus with SampleConsensusModelPerpendicularPlane did the same work at
+  // ~5x the cost: a shared model object, acos per hypothesis, OpenMP critical sections).
   const std::size_t stride =
-      (candidates.size() + static_cast<std::size_t>(max_samples_) - 1) / max_samples_;
-  if (!sample_) sample_.reset(new pcl::Indices);
-  sample_->clear();
-  for (std::size_t j = 0; j < candidates.size(); j += stride) sample_->push_back(candidates[j]);
-  model->setIndices(sample_);
-  if (!ransac.computeModel()) return false;
-  ransac.getInliers(inliers_);
-  Eigen::VectorXf coefficients;
-  ransac.getModelCoefficients(coefficients);
-  const pcl::Indices& inliers = inliers_;
-  if (inliers.size() < 6) return false;  // too few to refit (PCL needs more than 3)
-  Eigen::VectorXf refined;
-  model->optimizeModelCoefficients(inliers, coefficients, refined);
-  Eigen::Vector3f normal = refined.head<3>();
-  const float norm = normal.norm();
-  if (!(norm > 0.f) || !std::isfinite(refined[3])) return false;
-  float d = refined[3] / norm;
-  normal /= norm;
-  if (normal.z() < 0.f) {
-    normal = -normal;
-    d = -d;
+      (positions.size() + static_cast<std::size_t>(max_samples_) - 1) / max_samples_;
+  sample_x_.clear();
+  sample_y_.clear();
+  sample_z_.clear();
+  for (std::size_t j = 0; j < positions.size(); j += stride) {
+    const Eigen::Vector3f& p = cell_xyz_[positions[j]];
+    sample_x_.push_back(p.x());
+    sample_y_.push_back(p.y());
+    sample_z_.push_back(p.z());
   }
+  const int m = static_cast<int>(sample_x_.size());
+  if (m < 3) return false;
+  const float* sx = sample_x_.data();
+  const float* sy = sample_y_.data();
+  const float* sz = sample_z_.data();
+  const float threshold = fit_threshold_;
+  const float cos_tilt = std::cos(max_tilt_);
+  auto countInliers = [&](const Eigen::Vector4f& c) {
+    int count = 0;
+    for (int j = 0; j < m; ++j)
+      count += std::abs(c[0] * sx[j] + c[1] * sy[j] + c[2] * sz[j] + c[3]) < threshold;
+    return count;
+  };
+  // A fixed seed per cell (not per frame): the same cell points always give the same plane,
+  // whatever the other cells hold.
+  std::uint32_t state = seed * 2654435761u + 0x9e3779b9u;
+  auto draw = [&state, m]() {
+    state ^= state << 13;
+    state ^= state >> 17;
+    state ^= state << 5;
+    return static_cast<int>((static_cast<std::uint64_t>(state) * static_cast<std::uint32_t>(m)) >>
+                            32);
+  };
+  // Adaptive stop as pcl::RandomSampleConsensus: enough hypotheses for probability 0.99 of one
+  // outlier-free sample at the best inlier ratio seen so far, capped by getMaxIterations().
+  const double log_miss = std::log(1.0 - 0.99);
+  double needed = max_iterations_;
+  Eigen::Vector4f best(0.f, 0.f, 1.f, 0.f);
+  int best_count = 0;
+  for (int it = 0; it < max_iterations_ && it < needed; ++it) {
+    const int a = draw();
+    int b = draw(), c = draw();
+    if (b == a) b = (b + 1) % m;
+    while (c == a || c == b) c = (c + 1) % m;
+    const Eigen::Vector3f pa(sx[a], sy[a], sz[a]);
+    Eigen::Vector3f normal = (Eigen::Vector3f(sx[b], sy[b], sz[b]) - pa)
+                                 .cross(Eigen::Vector3f(sx[c], sy[c], sz[c]) - pa);
+    const float norm = normal.norm();
+    if (!(norm > 1e-6f)) continue;  // collinear sample
+    normal /= norm;
+    // The perpendicular-plane constraint: steeper than getMaxTilt() is no ground hypothesis.
+    if (std::abs(normal.z()) < cos_tilt) continue;
+    const Eigen::Vector4f model(normal.x(), normal.y(), normal.z(), -normal.dot(pa));
+    const int count = countInliers(model);
+    if (count > best_count) {
+      best_count = count;
+      best = model;
+      const double w = static_cast<double>(count) / m;
+      const double p_clean = std::max(1e-12, std::min(1.0 - 1e-12, 1.0 - w * w * w));
+      needed = log_miss / std::log(p_clean);
+    }
+  }
+  if (best_count < 6) return false;  // too few to refit
+  // Least-squares refit on the inliers (the smallest-eigenvalue direction of their covariance).
+  Eigen::Vector3f mean = Eigen::Vector3f::Zero();
+  const Eigen::Vector3f origin = input_->sensor_origin_.template head<3>();
+  float r2_min = std::numeric_limits<float>::max(), r2_max = 0.f;
+  for (int j = 0; j < m; ++j)
+    if (std::abs(best[0] * sx[j] + best[1] * sy[j] + best[2] * sz[j] + best[3]) < threshold) {
+      mean += Eigen::Vector3f(sx[j], sy[j], sz[j]);
+      const float dx = sx[j] - origin.x(), dy = sy[j] - origin.y();
+      const float r2 = dx * dx + dy * dy;
+      r2_min = std::min(r2_min, r2);
+      r2_max = std::max(r2_max, r2);
+    }
+  mean /= static_cast<float>(best_count);
+  Eigen::Matrix3f covariance = Eigen::Matrix3f::Zero();
+  for (int j = 0; j < m; ++j)
+    if (std::abs(best[0] * sx[j] + best[1] * sy[j] + best[2] * sz[j] + best[3]) < threshold) {
+      const Eigen::Vector3f q = Eigen::Vector3f(sx[j], sy[j], sz[j]) - mean;
+      covariance.noalias() += q * q.transpose();
+    }
+  float eigen_value;
+  Eigen::Vector3f normal;
+  pcl::eigen33(covariance, eigen_value, normal);
+  const float norm = normal.norm();
+  if (!(norm > 0.f) || !normal.allFinite()) return false;
+  normal /= norm;
+  if (normal.z() < 0.f) normal = -normal;
+  float d = -normal.dot(mean);
   // The least-squares refit is not bound by the tilt limit: check again.
-  if (normal.z() < std::cos(max_tilt_)) return false;
+  if (normal.z() < cos_tilt) return false;
   // Inliers on one scan line (a narrow radial extent) fix the height but not the slope along
   // the range direction: keep the prior's orientation, take only the height from the fit.
-  const Eigen::Vector3f origin = input_->sensor_origin_.template head<3>();
-  float r_min = std::numeric_limits<float>::max(), r_max = 0.f;
-  Eigen::Vector3f mean = Eigen::Vector3f::Zero();
-  for (const auto i : inliers) {
-    const Eigen::Vector3f p = (*input_)[i].getVector3fMap();
-    const float r = (p - origin).template head<2>().norm();
-    r_min = std::min(r_min, r);
-    r_max = std::max(r_max, r);
-    mean += p;
-  }
-  mean /= static_cast<float>(inliers.size());
-  if (r_max - r_min < 1.0f) {
+  if (std::sqrt(r2_max) - std::sqrt(r2_min) < 1.0f) {
     normal = prior.normal;
     d = -normal.dot(mean);
   }
@@ -210,21 +267,10 @@ void GroundPlaneFilter<PointT>::applyFilter(pcl::Indices& indices) {
            0.5f * (ring_edges_[ring] - (ring > 0 ? ring_edges_[ring - 1] : 0.f));
   };
 
-  // Built on an empty index list: the cloud constructor would fill (and copy) an index per point
-  // of the frame, only for fitPlane to replace them with the cell's subsample. A fresh model per
-  // call keeps the fixed seed, so every frame's RANSAC draws are reproducible.
-  SacModelPtr model(new SacModel(input_, pcl::Indices(), /*random=*/false));
-  model->setAxis(Eigen::Vector3f::UnitZ());
-  model->setEpsAngle(max_tilt_);
-  pcl::RandomSampleConsensus<PointT> ransac(model, fit_threshold_);
-  ransac.setMaxIterations(max_iterations_);
-  ransac.setProbability(0.99);
-
   Plane start;
   start.normal = Eigen::Vector3f::UnitZ();
   start.d = -(origin.z() - sensor_height_);
-  pcl::Indices candidates;
-  std::vector<int> positions;  // of the candidates in cell_xyz_
+  std::vector<int>& positions = positions_;  // of the candidates in cell_xyz_
 
   for (int ring = 0; ring < rings; ++ring) {
     const float centre_r = ringCentre(ring);
@@ -238,35 +284,29 @@ void GroundPlaneFilter<PointT>::applyFilter(pcl::Indices& indices) {
       if (count < min_points_per_cell_) continue;
 
       // Only points near the prior can be this cell's ground: keeps roofs and walls out.
-      candidates.clear();
       positions.clear();
       for (int j = cell_start[cell]; j < cell_start[cell + 1]; ++j)
-        if (std::abs(prior.height(cell_xyz_[j])) < band) {
-          candidates.push_back(cell_points[j]);
-          positions.push_back(j);
-        }
-      if (static_cast<int>(candidates.size()) < min_points_per_cell_) continue;
+        if (std::abs(prior.height(cell_xyz_[j])) < band) positions.push_back(j);
+      if (static_cast<int>(positions.size()) < min_points_per_cell_) continue;
       const Eigen::Vector2f c2 = origin.head<2>() + centre_r * sector_dirs[s];
       Plane fitted;
       bool ok = false;
       // A plane floating above real ground (the horizontal slice through a car's body, a bonnet,
       // a hedge top) leaves points clearly below it: drop it and everything above, fit again.
       for (int attempt = 0; attempt < 3; ++attempt) {
-        if (static_cast<int>(candidates.size()) < min_points_per_cell_) break;
-        if (!fitPlane(candidates, prior, band, c2, model, ransac, fitted)) break;
+        if (static_cast<int>(positions.size()) < min_points_per_cell_) break;
+        const auto seed = static_cast<std::uint32_t>(cell * 4 + attempt);
+        if (!fitPlane(positions, prior, band, c2, seed, fitted)) break;
         std::size_t below = 0;
         for (const auto j : positions) below += fitted.height(cell_xyz_[j]) < -2.f * fit_threshold_;
-        if (below < std::max<std::size_t>(min_points_per_cell_ / 2, candidates.size() / 20)) {
+        if (below < std::max<std::size_t>(min_points_per_cell_ / 2, positions.size() / 20)) {
           ok = true;
           break;
         }
         std::size_t kept = 0;
         for (std::size_t m = 0; m < positions.size(); ++m)
-          if (fitted.height(cell_xyz_[positions[m]]) < -fit_threshold_) {
-            candidates[kept] = candidates[m];
+          if (fitted.height(cell_xyz_[positions[m]]) < -fit_threshold_)
             positions[kept++] = positions[m];
-          }
-        candidates.resize(kept);
         positions.resize(kept);
       }
       if (!ok) continue;

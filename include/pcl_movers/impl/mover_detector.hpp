@@ -123,6 +123,7 @@ void MoverDetector<PointT>::process(const PointCloudConstPtr& scan, const Eigen:
   segmenter.setDepthThresholdFactor(static_cast<float>(p.depth_ratio));
   segmenter.setMinDepthThreshold(static_cast<float>(p.depth_min));
   segmenter.setMaxGap(p.max_gap);
+  segmenter.setBridgeLength(static_cast<float>(p.row_bridge));
   segmenter.setMinClusterSize(p.min_cluster_points);
   std::vector<pcl::PointIndices> clusters;
   segmenter.segment(clusters);

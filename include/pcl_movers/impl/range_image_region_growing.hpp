@@ -75,12 +75,55 @@ void RangeImageRegionGrowing<PointT>::segment(std::vector<pcl::PointIndices>& cl
   constexpr int kDirections[4][2] = {{0, 1}, {1, -1}, {1, 0}, {1, 1}};
   const int max_steps = 1 + max_gap_;
 
+  auto join = [this](int a, int b) {
+    const int root_a = findRoot(a), root_b = findRoot(b);
+    // The smaller index becomes the root, so roots are the first cell of their cluster.
+    if (root_a < root_b)
+      parent_[root_b] = root_a;
+    else if (root_b < root_a)
+      parent_[root_a] = root_b;
+  };
+  // Bridging along the row (see setBridgeLength()): the columns are assumed to span 360°, as in
+  // RangeImageOrganizer's images, so one column is 2π / width rad of azimuth.
+  const float bridge = bridge_length_;
+  const float column_angle = 2.f * static_cast<float>(M_PI) / static_cast<float>(width);
+  constexpr int kMaxBridgeColumns = 64;
+
   for (int row = 0; row < height; ++row) {
     for (int col = 0; col < width; ++col) {
       const int i = row * width + col;
       const float ra = range_[i];
       if (ra < 0.f) continue;
+      if (bridge > 0.f) {
+        // Along the row, look past empty cells and past nearer cells (a pole or a sign in front
+        // of a car) for the first cell at about this cell's depth, up to `bridge` metres away.
+        // Compared in float first: near the sensor (ra -> 0) the quotient overflows an int.
+        const float columns = bridge / (ra * column_angle);
+        const int reach =
+            columns >= static_cast<float>(kMaxBridgeColumns)
+                ? kMaxBridgeColumns
+                : std::max(max_steps, std::min(kMaxBridgeColumns, static_cast<int>(columns) + 1));
+        const float threshold_a = std::max(k * ra, floor);
+        for (int step = 1; step <= reach; ++step) {
+          int c = col + step;
+          if (c >= width) {
+            if (!wrap) break;
+            c -= width;
+          }
+          const int j = row * width + c;
+          if (j == i) break;
+          const float rb = range_[j];
+          if (rb < 0.f || rb < ra - threshold_a) continue;  // empty or in front: look further
+          if (std::abs(ra - rb) <= std::max(k * std::min(ra, rb), floor) &&
+              (step <= max_steps ||
+               ((*input_)[i].getVector3fMap() - (*input_)[j].getVector3fMap()).squaredNorm() <=
+                   bridge * bridge))
+            join(i, j);
+          break;
+        }
+      }
       for (const auto& dir : kDirections) {
+        if (bridge > 0.f && dir[0] == 0) continue;  // the row was handled above
         for (int step = 1; step <= max_steps; ++step) {
           const int r = row + dir[0] * step;
           if (r >= height) break;
@@ -93,14 +136,7 @@ void RangeImageRegionGrowing<PointT>::segment(std::vector<pcl::PointIndices>& cl
           if (j == i) break;  // a full turn on a tiny image
           const float rb = range_[j];
           if (rb < 0.f) continue;  // empty: look one cell further (gap bridging)
-          if (std::abs(ra - rb) <= std::max(k * std::min(ra, rb), floor)) {
-            const int root_a = findRoot(i), root_b = findRoot(j);
-            // The smaller index becomes the root, so roots are the first cell of their cluster.
-            if (root_a < root_b)
-              parent_[root_b] = root_a;
-            else if (root_b < root_a)
-              parent_[root_a] = root_b;
-          }
+          if (std::abs(ra - rb) <= std::max(k * std::min(ra, rb), floor)) join(i, j);
           break;  // only the first valid cell in each direction is a neighbour
         }
       }
