@@ -10,6 +10,7 @@
 #include <benchmark/benchmark.h>
 #include <pcl_movers/io/sequence.h>
 #include <pcl_movers/mover_detector.h>
+#include "bench_common.h"
 
 #include <algorithm>
 #include <ctime>
@@ -57,14 +58,6 @@ const Sequence& kittiSequence() {
   return seq;
 }
 
-/** CPU time of this thread [ms]: unlike wall-clock time it is not inflated when other processes
- * compete for the cores. */
-double threadCpuMs() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
-}
-
 double median(std::vector<double> v) {
   if (v.empty()) return 0;
   std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
@@ -89,9 +82,9 @@ void runSequence(benchmark::State& state, const std::string& mode) {
     detector.setParameters(params);
     for (std::size_t i = 0; i < seq.scans.size(); ++i) {
       Detector::FrameResult result;
-      const double cpu0 = threadCpuMs();
+      const double cpu0 = pcl_movers_bench::threadCpuMs();
       detector.process(seq.scans[i], seq.poses[i], seq.times[i], static_cast<int>(i), result);
-      cpu_ms.push_back(threadCpuMs() - cpu0);
+      cpu_ms.push_back(pcl_movers_bench::threadCpuMs() - cpu0);
       for (const auto& t : detector.getTimings()) stage_ms[t.first].push_back(t.second);
       registrations.push_back(detector.getTracker().getRegistrationCount());
       benchmark::DoNotOptimize(result.rows.data());

@@ -18,6 +18,7 @@
 #include <pcl/io/pcd_io.h>
 #include <pcl/point_types.h>
 #include <pcl/range_image/range_image.h>
+#include "bench_common.h"
 
 #include <algorithm>
 #include <chrono>
@@ -78,19 +79,11 @@ double median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
-/** CPU time of this thread [ms]: the machine running the benchmarks is shared, and wall time
- * would charge other processes' time slices to whichever method happened to be running. */
-double threadMillis() {
-  timespec ts;
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return double(ts.tv_sec) * 1e3 + double(ts.tv_nsec) * 1e-6;
-}
-
 template <typename F>
 double millis(F&& f) {
-  const double start = threadMillis();
+  const double start = pcl_movers_bench::threadCpuMs();
   f();
-  return threadMillis() - start;
+  return pcl_movers_bench::threadCpuMs() - start;
 }
 
 void pclRangeImage(const Cloud& cloud, int columns, pcl::RangeImage& image) {

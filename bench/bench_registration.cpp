@@ -22,6 +22,7 @@
 #include <pcl/registration/ndt.h>
 
 #include <benchmark/benchmark.h>
+#include "bench_common.h"
 
 #include <algorithm>
 #include <chrono>
@@ -149,13 +150,6 @@ std::vector<Trial> makeTrials(std::size_t pairs, unsigned seed) {
   return t;
 }
 
-/** Thread CPU time [ms]: the benchmark machine is shared, so wall time would measure the load. */
-double cpuMs() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return 1e3 * static_cast<double>(ts.tv_sec) + 1e-6 * static_cast<double>(ts.tv_nsec);
-}
-
 struct Result {
   std::vector<float> err, yaw_err, ms, similarity;
   std::vector<int> bin;
@@ -183,7 +177,7 @@ Result run(const Method& method, const std::vector<RegistrationPair>& pairs,
       const int n = static_cast<int>(std::min(p.source->size(), p.target->size()));
       gicp->setCorrespondenceRandomness(std::min(20, n - 1));
     }
-    const double start = cpuMs();
+    const double start = pcl_movers_bench::threadCpuMs();
     reg->setInputSource(p.source);
     reg->setInputTarget(p.target);
     if (method.occluders)
@@ -194,7 +188,7 @@ Result run(const Method& method, const std::vector<RegistrationPair>& pairs,
         b->setTargetOccluders(p.target_occluders);
       }
     reg->align(out, guess);
-    const double ms = cpuMs() - start;
+    const double ms = pcl_movers_bench::threadCpuMs() - start;
     const Eigen::Matrix4f est = reg->getFinalTransformation();
     r.err.push_back(pcl_movers::eval::translationError(est, p));
     r.yaw_err.push_back(pcl_movers::eval::yawError(est, p) * 180.f / kPi);
@@ -620,14 +614,14 @@ int calibrate() {
       pcl_movers::detail::correlateFft(work, target, layer, nr, 0, b.data());  // warm target cache
       const double fm = pcl_movers::detail::fftCost(work, target, layer, nr, 0);
       const int reps = 5;
-      double t0 = cpuMs();
+      double t0 = pcl_movers_bench::threadCpuMs();
       for (int r = 0; r < reps; ++r)
         pcl_movers::detail::correlateDirect(target, layer, -nr, nr, -nr, nr, 0, 0, a.data());
-      const double td = (cpuMs() - t0) / reps;
-      t0 = cpuMs();
+      const double td = (pcl_movers_bench::threadCpuMs() - t0) / reps;
+      t0 = pcl_movers_bench::threadCpuMs();
       for (int r = 0; r < reps; ++r)
         pcl_movers::detail::correlateFft(work, target, layer, nr, 0, b.data());
-      const double tf = (cpuMs() - t0) / reps;
+      const double tf = (pcl_movers_bench::threadCpuMs() - t0) / reps;
       float maxdiff = 0.f;
       for (std::size_t i = 0; i < a.size(); ++i) maxdiff = std::max(maxdiff, std::abs(a[i] - b[i]));
       std::printf("%zu %zu %.1f %s %.4f %.4f %.4f %.4f diff %.2g\n", p.source->size(),

@@ -11,11 +11,10 @@
  */
 #include <benchmark/benchmark.h>
 #include <pcl_movers/free_space_map.h>
-#include <pcl_movers/ground_plane_filter.h>
 #include <pcl_movers/io/sequence.h>
 #include <pcl_movers/mover_detector.h>
 #include <pcl_movers/mover_tracker.h>
-#include <pcl_movers/range_image_region_growing.h>
+#include "bench_common.h"
 
 #include <algorithm>
 #include <cmath>
@@ -55,7 +54,7 @@ const Inputs& trackerInputs() {
     try {
       const pcl_movers::DetectorParameters p;
       pcl_movers::io::SequenceReader reader(folder);
-      // The detector organizes the scans (with its sensor model); the rest as in process().
+      // The detector organizes the scans (with its sensor model).
       pcl_movers::MoverDetector<PointT> detector;
       detector.setParameters(p);
       for (std::size_t i = 0; i < reader.size(); ++i) {
@@ -69,33 +68,13 @@ const Inputs& trackerInputs() {
         pcl_movers::MoverDetector<PointT>::FrameResult result;
         detector.process(scan, f.pose, f.time, static_cast<int>(i), result);
         f.organized = result.organized;
-        pcl_movers::GroundPlaneFilter<PointT> ground;
-        ground.setInputCloud(f.organized);
-        ground.setDistanceThreshold(static_cast<float>(p.ground_distance));
-        ground.setMaxTilt(static_cast<float>(p.ground_max_slope_deg * M_PI / 180.0));
-        ground.setSensorHeight(static_cast<float>(p.sensor_height));
-        ground.setLocalSlopeCheck(p.ground_local_slope != 0);
-        pcl::IndicesPtr objects(new pcl::Indices);
-        ground.filter(*objects);
-        pcl_movers::RangeImageRegionGrowing<PointT> segmenter;
-        segmenter.setInputCloud(f.organized);
-        segmenter.setIndices(objects);
-        segmenter.setDepthThresholdFactor(static_cast<float>(p.depth_ratio));
-        segmenter.setMinDepthThreshold(static_cast<float>(p.depth_min));
-        segmenter.setMaxGap(p.max_gap);
-        segmenter.setMinClusterSize(p.min_cluster_points);
-        std::vector<pcl::PointIndices> clusters;
-        segmenter.segment(clusters);
-        const Eigen::Isometry3f pose_f = f.pose.cast<float>();
+        // The detector's own stage functions, so the tracker sees exactly its input.
+        const pcl::IndicesPtr objects = detector.removeGround(f.organized);
+        const std::vector<pcl::PointIndices> clusters =
+            detector.segmentObjects(f.organized, objects);
         f.world.reset(new Cloud);
-        f.clusters.resize(clusters.size());
-        for (std::size_t c = 0; c < clusters.size(); ++c)
-          for (const auto k : clusters[c].indices) {
-            PointT q = (*f.organized)[k];
-            q.getVector3fMap() = pose_f * q.getVector3fMap();
-            f.clusters[c].indices.push_back(static_cast<int>(f.world->size()));
-            f.world->push_back(q);
-          }
+        pcl_movers::MoverDetector<PointT>::clustersToWorld(*f.organized, clusters, f.pose, *f.world,
+                                                           f.clusters);
         s.frames.push_back(std::move(f));
       }
     } catch (const std::exception& e) {
@@ -104,12 +83,6 @@ const Inputs& trackerInputs() {
     return s;
   }();
   return in;
-}
-
-double threadCpuMs() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
 }
 
 double median(std::vector<double> v) {
@@ -149,9 +122,9 @@ void runTracker(benchmark::State& state, const std::string& mode) {
         tracker.setFreeSpaceMap(&free_space);
       }
       state.ResumeTiming();
-      const double cpu0 = threadCpuMs();
+      const double cpu0 = pcl_movers_bench::threadCpuMs();
       tracker.update(f.world, f.clusters, f.pose.translation(), f.time);
-      cpu_ms[i] = std::min(cpu_ms[i], threadCpuMs() - cpu0);
+      cpu_ms[i] = std::min(cpu_ms[i], pcl_movers_bench::threadCpuMs() - cpu0);
       registrations[i] = tracker.getRegistrationCount();
     }
   }

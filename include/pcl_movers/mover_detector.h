@@ -103,6 +103,23 @@ class MoverDetector {
 
   const MoverTracker<PointT>& getTracker() const { return tracker_; }
 
+  /** \brief The ground stage of process(): indices of the non-ground points of `organized`,
+   * with the current parameters. Public so that benchmarks and tools reproduce the tracker's input
+   * exactly instead of re-configuring the stages by hand. */
+  pcl::IndicesPtr removeGround(const PointCloudConstPtr& organized) const;
+
+  /** \brief The segmentation stage of process(): clusters of `objects` (indices into
+   * `organized`), with the current parameters. */
+  std::vector<pcl::PointIndices> segmentObjects(const PointCloudConstPtr& organized,
+                                                const pcl::IndicesPtr& objects) const;
+
+  /** \brief The transform stage of process(): the points of `clusters` moved by `pose` into
+   * `world` (only cluster points), and each cluster's indices into `world`. */
+  static void clustersToWorld(const PointCloud& organized,
+                              const std::vector<pcl::PointIndices>& clusters,
+                              const Eigen::Isometry3d& pose, PointCloud& world,
+                              std::vector<pcl::PointIndices>& world_clusters);
+
   /** \brief Forgets all tracks (start of a new sequence). */
   void reset() {
     tracker_.reset();

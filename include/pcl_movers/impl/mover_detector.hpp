@@ -79,6 +79,59 @@ typename MoverDetector<PointT>::PointCloudConstPtr MoverDetector<PointT>::organi
 }
 
 template <typename PointT>
+pcl::IndicesPtr MoverDetector<PointT>::removeGround(const PointCloudConstPtr& organized) const {
+  const auto& p = parameters_;
+  GroundPlaneFilter<PointT> ground;
+  ground.setInputCloud(organized);
+  ground.setDistanceThreshold(static_cast<float>(p.ground_distance));
+  ground.setMaxTilt(static_cast<float>(p.ground_max_slope_deg * M_PI / 180.0));
+  ground.setSensorHeight(static_cast<float>(p.sensor_height));
+  ground.setLocalSlopeCheck(p.ground_local_slope != 0);
+  pcl::IndicesPtr objects(new pcl::Indices);
+  ground.filter(*objects);
+  return objects;
+}
+
+template <typename PointT>
+std::vector<pcl::PointIndices> MoverDetector<PointT>::segmentObjects(
+    const PointCloudConstPtr& organized, const pcl::IndicesPtr& objects) const {
+  const auto& p = parameters_;
+  RangeImageRegionGrowing<PointT> segmenter;
+  segmenter.setInputCloud(organized);
+  segmenter.setIndices(objects);
+  segmenter.setDepthThresholdFactor(static_cast<float>(p.depth_ratio));
+  segmenter.setMinDepthThreshold(static_cast<float>(p.depth_min));
+  segmenter.setMaxGap(p.max_gap);
+  segmenter.setBridgeLength(static_cast<float>(p.row_bridge));
+  segmenter.setMinClusterSize(p.min_cluster_points);
+  std::vector<pcl::PointIndices> clusters;
+  segmenter.segment(clusters);
+  return clusters;
+}
+
+template <typename PointT>
+void MoverDetector<PointT>::clustersToWorld(const PointCloud& organized,
+                                            const std::vector<pcl::PointIndices>& clusters,
+                                            const Eigen::Isometry3d& pose, PointCloud& world,
+                                            std::vector<pcl::PointIndices>& world_clusters) {
+  const Eigen::Isometry3f pose_f = pose.cast<float>();
+  world.clear();
+  world_clusters.assign(clusters.size(), pcl::PointIndices());
+  std::size_t total = 0;
+  for (const auto& c : clusters) total += c.indices.size();
+  world.reserve(total);
+  for (std::size_t c = 0; c < clusters.size(); ++c) {
+    world_clusters[c].indices.reserve(clusters[c].indices.size());
+    for (const auto i : clusters[c].indices) {
+      PointT q = organized[i];
+      q.getVector3fMap() = pose_f * q.getVector3fMap();
+      world_clusters[c].indices.push_back(static_cast<int>(world.size()));
+      world.push_back(q);
+    }
+  }
+}
+
+template <typename PointT>
 void MoverDetector<PointT>::process(const PointCloudConstPtr& scan, const Eigen::Isometry3d& pose,
                                     double time, int frame, FrameResult& result) {
   using Clock = std::chrono::steady_clock;
@@ -106,46 +159,18 @@ void MoverDetector<PointT>::process(const PointCloudConstPtr& scan, const Eigen:
 
   // Ground removal: indices of the non-ground points.
   const auto t1 = Clock::now();
-  GroundPlaneFilter<PointT> ground;
-  ground.setInputCloud(organized);
-  ground.setDistanceThreshold(static_cast<float>(p.ground_distance));
-  ground.setMaxTilt(static_cast<float>(p.ground_max_slope_deg * M_PI / 180.0));
-  ground.setSensorHeight(static_cast<float>(p.sensor_height));
-  ground.setLocalSlopeCheck(p.ground_local_slope != 0);
-  pcl::IndicesPtr objects(new pcl::Indices);
-  ground.filter(*objects);
+  const pcl::IndicesPtr objects = removeGround(organized);
 
   // Segmentation of the non-ground points on the range image.
   const auto t2 = Clock::now();
-  RangeImageRegionGrowing<PointT> segmenter;
-  segmenter.setInputCloud(organized);
-  segmenter.setIndices(objects);
-  segmenter.setDepthThresholdFactor(static_cast<float>(p.depth_ratio));
-  segmenter.setMinDepthThreshold(static_cast<float>(p.depth_min));
-  segmenter.setMaxGap(p.max_gap);
-  segmenter.setBridgeLength(static_cast<float>(p.row_bridge));
-  segmenter.setMinClusterSize(p.min_cluster_points);
-  std::vector<pcl::PointIndices> clusters;
-  segmenter.segment(clusters);
+  const std::vector<pcl::PointIndices> clusters = segmentObjects(organized, objects);
   result.clusters = static_cast<int>(clusters.size());
 
   // World frame: only the cluster points are transformed (the rest is never used again).
   const auto t3 = Clock::now();
-  const Eigen::Isometry3f pose_f = pose.cast<float>();
   PointCloudPtr world(new PointCloud);
-  std::vector<pcl::PointIndices> world_clusters(clusters.size());
-  std::size_t total = 0;
-  for (const auto& c : clusters) total += c.indices.size();
-  world->reserve(total);
-  for (std::size_t c = 0; c < clusters.size(); ++c) {
-    world_clusters[c].indices.reserve(clusters[c].indices.size());
-    for (const auto i : clusters[c].indices) {
-      PointT q = (*organized)[i];
-      q.getVector3fMap() = pose_f * q.getVector3fMap();
-      world_clusters[c].indices.push_back(static_cast<int>(world->size()));
-      world->push_back(q);
-    }
-  }
+  std::vector<pcl::PointIndices> world_clusters;
+  clustersToWorld(*organized, clusters, pose, *world, world_clusters);
 
   // Tracking; the free-space map needs the current scan first (receding-object test).
   const auto t4 = Clock::now();
