@@ -519,6 +519,103 @@ TEST(RangeImageOrganizer, ReusedOrganizerMatchesAFreshOne) {
   }
 }
 
+TEST(RangeImageOrganizer, ScanOrderedInputMatchesShuffledInput) {
+  // The AVX2 kernel confirms the previous row for eight points at once when the input comes beam
+  // after beam (as KITTI's does) and looks rows up otherwise. Both must give the same cells: the
+  // same scan in recording order and shuffled, with points 49 % of the way to the neighbouring
+  // beam (the band edges) and a few just past half-way (in the neighbouring row, amid a run of
+  // this beam), azimuth exactly ±pi, points nearer than the row table
+  // reaches (< 1 m), runs broken by NaN points, and rows changing in the middle of eight points.
+  const SensorModel model = SensorModel::hdl64();
+  const int columns = model.columns();
+  std::mt19937 rng(31);
+  std::uniform_real_distribution<float> unit(0.f, 1.f);
+  Cloud::Ptr ordered(new Cloud);
+  std::vector<float> fraction;  // how far towards a neighbouring beam, in beam spacings
+  for (int r = 0; r < 64; ++r) {
+    const float spacing_up = r > 0 ? model.elevations()[r - 1] - model.elevations()[r]
+                                   : model.elevations()[0] - model.elevations()[1];
+    const float spacing_down = r < 63 ? model.elevations()[r] - model.elevations()[r + 1]
+                                      : model.elevations()[62] - model.elevations()[63];
+    // Beam r uses every fourth column (offset r % 4), so a point leaning into a neighbouring
+    // row never meets that row's points nor those leaning in from its other side: no
+    // collision, the cells do not depend on the order.
+    const int length = 100 + int(unit(rng) * 450.f);  // a part of the turn, odd lengths too
+    for (int j = 0; j < length; ++j) {
+      const int c = 4 * j + (r % 4);
+      pcl::PointXYZI p;
+      if (unit(rng) < 0.01f) {
+        p.x = p.y = p.z = std::numeric_limits<float>::quiet_NaN();
+        ordered->push_back(p);
+        fraction.push_back(0.f);
+        continue;
+      }
+      const float rho = unit(rng) < 0.03f ? 0.4f + 0.5f * unit(rng) : 1.5f + 60.f * unit(rng);
+      const float u = unit(rng);
+      // Just inside the band edges, just across them (the point belongs to the neighbouring
+      // row: a lane of eight in another row than the run), or well inside.
+      const float across = 0.51f + 0.1f * unit(rng);
+      const float f = u < 0.2f    ? 0.49f
+                      : u < 0.4f  ? -0.49f
+                      : u < 0.45f ? across
+                      : u < 0.5f  ? -across
+                                  : 0.8f * (unit(rng) - 0.5f);
+      const float e = model.elevations()[r] + (f > 0.f ? f * spacing_up : f * spacing_down);
+      const float a =
+          model.azimuthOf(c) + 0.6f * (unit(rng) - 0.5f) * float(2 * M_PI) / float(columns);
+      p.x = rho * std::cos(a);
+      p.y = rho * std::sin(a);
+      if (c == 0) {  // exactly on the ±pi seam, from either side of y = 0
+        p.x = -rho;
+        p.y = r % 8 == 0 ? 0.f : -0.f;
+      }
+      p.z = rho * std::tan(e) + model.verticalOffsets()[r];
+      p.intensity = float(ordered->size());
+      ordered->push_back(p);
+      fraction.push_back(rho < 1.f ? 1.f : f);  // near points: no exact-row check below
+    }
+  }
+  std::vector<std::size_t> order(ordered->size());
+  std::iota(order.begin(), order.end(), 0);
+  std::shuffle(order.begin(), order.end(), rng);
+  Cloud::Ptr shuffled(new Cloud);
+  for (const auto i : order) shuffled->push_back((*ordered)[i]);
+
+  RangeImageOrganizer<pcl::PointXYZI> a, b;
+  for (auto* organizer : {&a, &b}) {
+    organizer->setSensorModel(model);
+    organizer->setUseFreeNeighbour(false);
+  }
+  a.setInputCloud(ordered);
+  b.setInputCloud(shuffled);
+  Cloud out_a, out_b;
+  a.organize(out_a);
+  b.organize(out_b);
+  ASSERT_EQ(a.getDisplacedCount(), 0u);  // else the cells would depend on the order
+  ASSERT_EQ(b.getDisplacedCount(), 0u);
+  EXPECT_EQ(a.getInvalidCount(), b.getInvalidCount());
+  EXPECT_GT(a.getInvalidCount(), 100u);
+  std::size_t placed = 0, checked_rows = 0;
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    const std::size_t i = order[k];
+    ASSERT_EQ(a.getCellOfPoint()[i], b.getCellOfPoint()[k]) << "point " << i;
+    const int cell = a.getCellOfPoint()[i];
+    if (cell < 0) continue;
+    ++placed;
+    ASSERT_EQ(out_a[std::size_t(cell)].intensity, float(i));
+    const auto& p = (*ordered)[i];
+    if (std::abs(fraction[i]) <= 0.4f) {
+      ASSERT_EQ(cell / columns, model.rowOfPoint(std::sqrt(p.x * p.x + p.y * p.y), p.z))
+          << "point " << i;
+      ++checked_rows;
+    }
+  }
+  EXPECT_GT(placed, ordered->size() * 9 / 10);
+  EXPECT_GT(checked_rows, placed / 3);  // half are at or past the band edges
+  for (std::size_t c = 0; c < out_a.size(); ++c)
+    ASSERT_EQ(a.getIndexImage()[c] < 0, b.getIndexImage()[c] < 0) << "cell " << c;
+}
+
 /** The laser of each point from the recording order KITTI keeps (turns start at azimuth 0). */
 std::vector<int> scanOrderBeams(const Cloud& cloud) {
   std::vector<int> beam(cloud.size());

@@ -144,6 +144,7 @@ class RangeImageOrganizer : public pcl::PCLBase<PointT> {
   std::vector<std::uint16_t> row_table_;
   float mean_offset_ = 0.f, table_g_min_ = 0.f, table_g_scale_ = 0.f, table_w_scale_ = 0.f;
   int table_g_bins_ = 0, table_w_bins_ = 0;
+  bool ordered_mid_lines_ = false;  // mid-lines keep their order over the table (see the kernel)
   float upper_limit_ = 0.f, lower_limit_ = 0.f;  // half a spacing outside the outer beams, in t
   float upper_offset_ = 0.f, lower_offset_ = 0.f;
   float azimuth_max_ = 0.f, columns_per_radian_ = 0.f;
