@@ -115,8 +115,10 @@ class RangeImageRegionGrowing : public pcl::PCLBase<PointT> {
   int max_cluster_size_ = std::numeric_limits<int>::max();
 
   // Work buffers kept between calls so a sequence of frames does not reallocate.
-  std::vector<float> range_;
-  std::vector<int> parent_;
+  std::vector<float> range_;      ///< per cell: range, < 0 when the cell does not take part
+  std::vector<float> threshold_;  ///< per valid cell: max(k * range, floor)
+  std::vector<int> parent_;       ///< union-find forest over the cells
+  std::vector<int> set_of_, set_sizes_, set_order_, set_output_;  ///< cluster collection
 };
 
 }  // namespace pcl_movers
