@@ -284,9 +284,14 @@ void GroundPlaneFilter<PointT>::applyFilter(pcl::Indices& indices) {
       if (count < min_points_per_cell_) continue;
 
       // Only points near the prior can be this cell's ground: keeps roofs and walls out.
-      positions.clear();
-      for (int j = cell_start[cell]; j < cell_start[cell + 1]; ++j)
-        if (std::abs(prior.height(cell_xyz_[j])) < band) positions.push_back(j);
+      // Written unconditionally, kept by advancing the count: no branch per point.
+      positions.resize(count);
+      std::size_t kept_near = 0;
+      for (int j = cell_start[cell]; j < cell_start[cell + 1]; ++j) {
+        positions[kept_near] = j;
+        kept_near += std::abs(prior.height(cell_xyz_[j])) < band;
+      }
+      positions.resize(kept_near);
       if (static_cast<int>(positions.size()) < min_points_per_cell_) continue;
       const Eigen::Vector2f c2 = origin.head<2>() + centre_r * sector_dirs[s];
       Plane fitted;
@@ -353,12 +358,13 @@ void GroundPlaneFilter<PointT>::applyFilter(pcl::Indices& indices) {
   // Steep flags of the ground candidates; a flag counts only when a row neighbour (same beam,
   // next azimuth) is flagged too: vegetation and wall bases are rough over several columns, while
   // range noise on the road flags isolated points.
+  // The candidates are the cells with |height| < threshold: height_ is NaN for every cell that is
+  // not in indices_ or not finite, so one pass over the image finds them without reading
+  // indices_ or cell_of.
   if (slope_check) {
     steep_.assign(input_->size(), 0);
-    for (std::size_t k = 0; k < n; ++k) {
-      const int idx = (*indices_)[k];
-      if (cell_of[k] >= 0 && std::abs(height_[idx]) < distance_threshold_) steep_[idx] = steep(idx);
-    }
+    for (int idx = 0; idx < image_size; ++idx)
+      if (std::abs(height_[idx]) < distance_threshold_) steep_[idx] = steep(idx);
   }
   auto rejected = [&](int idx) {
     if (!steep_[idx]) return false;
