@@ -143,6 +143,26 @@ void RangeImageRegionGrowing<PointT>::segment(std::vector<pcl::PointIndices>& cl
           break;
         }
       }
+      // Away from the first and last columns no scan leaves the image sideways: the cells of a
+      // direction are then i + step * stride, inside the image while below n.
+      if (col >= max_steps && col + max_steps < width) {
+        if (!(bridge > 0.f)) {
+          for (int j = i + 1; j <= i + max_steps; ++j) {
+            if (range_[j] < 0.f) continue;
+            if (depthMatch(i, j)) join(j);
+            break;
+          }
+        }
+        for (int dc = -1; dc <= 1; ++dc) {
+          const int stride = width + dc;
+          for (int step = 1, j = i + stride; step <= max_steps && j < n; ++step, j += stride) {
+            if (range_[j] < 0.f) continue;  // empty: look one cell further (gap bridging)
+            if (depthMatch(i, j)) join(j);
+            break;  // only the first valid cell in each direction is a neighbour
+          }
+        }
+        continue;
+      }
       for (const auto& dir : kDirections) {
         if (bridge > 0.f && dir[0] == 0) continue;  // the row was handled above
         for (int step = 1; step <= max_steps; ++step) {
