@@ -118,29 +118,37 @@ void RangeImageRegionGrowing<PointT>::segment(std::vector<pcl::PointIndices>& cl
       if (bridge > 0.f) {
         // Along the row, look past empty cells and past nearer cells (a pole or a sign in front
         // of a car) for the first cell at about this cell's depth, up to `bridge` metres away.
-        // Compared in float first: near the sensor (ra -> 0) the quotient overflows an int.
-        const float columns = bridge / (ra * column_angle);
-        const int reach =
-            columns >= static_cast<float>(kMaxBridgeColumns)
-                ? kMaxBridgeColumns
-                : std::max(max_steps, std::min(kMaxBridgeColumns, static_cast<int>(columns) + 1));
         const float nearest = ra - threshold_[i];
-        for (int step = 1; step <= reach; ++step) {
-          int c = col + step;
-          if (c >= width) {
-            if (!wrap) break;
-            c -= width;
+        // The usual case first: the next cell is valid and not nearer, so the search ends there
+        // (a first step is within max_steps: no 3D check, and no reach to compute).
+        const float next = col + 1 < width ? range_[i + 1] : -1.f;
+        if (!(next < 0.f || next < nearest)) {
+          if (depthMatch(i, i + 1)) join(i + 1);
+        } else {
+          // Compared in float first: near the sensor (ra -> 0) the quotient overflows an int.
+          const float columns = bridge / (ra * column_angle);
+          const int reach =
+              columns >= static_cast<float>(kMaxBridgeColumns)
+                  ? kMaxBridgeColumns
+                  : std::max(max_steps, std::min(kMaxBridgeColumns, static_cast<int>(columns) + 1));
+          // From step 2 when the first cell was looked at above.
+          for (int step = col + 1 < width ? 2 : 1; step <= reach; ++step) {
+            int c = col + step;
+            if (c >= width) {
+              if (!wrap) break;
+              c -= width;
+            }
+            const int j = row * width + c;
+            if (j == i) break;
+            const float rb = range_[j];
+            if (rb < 0.f || rb < nearest) continue;  // empty or in front: look further
+            if (depthMatch(i, j) &&
+                (step <= max_steps ||
+                 ((*input_)[i].getVector3fMap() - (*input_)[j].getVector3fMap()).squaredNorm() <=
+                     bridge * bridge))
+              join(j);
+            break;
           }
-          const int j = row * width + c;
-          if (j == i) break;
-          const float rb = range_[j];
-          if (rb < 0.f || rb < nearest) continue;  // empty or in front: look further
-          if (depthMatch(i, j) &&
-              (step <= max_steps ||
-               ((*input_)[i].getVector3fMap() - (*input_)[j].getVector3fMap()).squaredNorm() <=
-                   bridge * bridge))
-            join(j);
-          break;
         }
       }
       // Away from the first and last columns no scan leaves the image sideways: the cells of a
