@@ -333,27 +333,20 @@ void GroundPlaneFilter<PointT>::applyFilter(pcl::Indices& indices) {
       height_[cell_points[j]] = plane.height(cell_xyz_[j]);
   }
   const int width = static_cast<int>(input_->width);
-  const int image_size = static_cast<int>(input_->size());
   const float tan_slope = std::tan(std::min(max_local_slope_, 1.5707f));
   const float tan2_slope = tan_slope * tan_slope;
   // Steep rise between a ground candidate and its column neighbours (see the class description).
-  auto steep = [&](int idx) {
-    const float h = height_[idx];
-    const Eigen::Vector3f p = (*input_)[idx].getVector3fMap();
-    for (const int dr : {-1, 1}) {
-      // The row above / below exists iff its index stays inside the image (width * rows
-      // points): no integer division per candidate to find the row.
-      const int j = idx + dr * width;
-      if (j < 0 || j >= image_size) continue;
-      const float hj = height_[j];
-      if (!(std::abs(hj) <= local_slope_band_)) continue;  // NaN, or an object on the ground
-      const float rise = std::abs(hj - h) - range_noise_;
-      if (rise <= 0.f) continue;
-      const Eigen::Vector3f q = (*input_)[j].getVector3fMap();
-      // rise > tan(slope) * horizontal distance, squared (both sides >= 0): no square root.
-      if (rise * rise > tan2_slope * (q - p).template head<2>().squaredNorm()) return true;
-    }
-    return false;
+  // Neighbour j is steep when it is near its plane (|h_j| <= band: not NaN, not an object on the
+  // ground) and its rise, minus the noise, exceeds tan(slope) times the horizontal distance
+  // (squared, both sides >= 0: no square root). Evaluated without branches: NaN heights make the
+  // comparisons false, and the outcomes along a row are too irregular to predict.
+  const float band = local_slope_band_;
+  const float noise = range_noise_;
+  auto steepTo = [&](int j, float h, float px, float py) {
+    const float hj = height_[j];
+    const float rise = std::abs(hj - h) - noise;
+    const float dx = (*input_)[j].x - px, dy = (*input_)[j].y - py;
+    return (std::abs(hj) <= band) & (rise > 0.f) & (rise * rise > tan2_slope * (dx * dx + dy * dy));
   };
   // Steep flags of the ground candidates; a flag counts only when a row neighbour (same beam,
   // next azimuth) is flagged too: vegetation and wall bases are rough over several columns, while
@@ -363,8 +356,19 @@ void GroundPlaneFilter<PointT>::applyFilter(pcl::Indices& indices) {
   // indices_ or cell_of.
   if (slope_check) {
     steep_.assign(input_->size(), 0);
-    for (int idx = 0; idx < image_size; ++idx)
-      if (std::abs(height_[idx]) < distance_threshold_) steep_[idx] = steep(idx);
+    const int rows = static_cast<int>(input_->height);
+    for (int row = 0; row < rows; ++row) {
+      const bool up = row > 0, down = row + 1 < rows;
+      for (int idx = row * width; idx < (row + 1) * width; ++idx) {
+        const float h = height_[idx];
+        if (!(std::abs(h) < distance_threshold_)) continue;
+        const float px = (*input_)[idx].x, py = (*input_)[idx].y;
+        bool s = false;
+        if (up) s |= steepTo(idx - width, h, px, py);
+        if (down) s |= steepTo(idx + width, h, px, py);
+        steep_[idx] = s;
+      }
+    }
   }
   auto rejected = [&](int idx) {
     if (!steep_[idx]) return false;
