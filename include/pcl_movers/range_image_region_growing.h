@@ -99,7 +99,9 @@ class RangeImageRegionGrowing : public pcl::PCLBase<PointT> {
   void setMaxClusterSize(int n) { max_cluster_size_ = n; }
   int getMaxClusterSize() const { return max_cluster_size_; }
 
-  /** \brief Segments the input into clusters (see the class description for errors). */
+  /** \brief Segments the input into clusters (see the class description for errors). The
+   * previous content of `clusters` is replaced; its index vectors are reused, so passing the
+   * same vector frame after frame avoids reallocating them. */
   void segment(std::vector<pcl::PointIndices>& clusters);
 
  protected:
