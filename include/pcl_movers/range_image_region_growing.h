@@ -121,6 +121,7 @@ class RangeImageRegionGrowing : public pcl::PCLBase<PointT> {
   std::vector<float> threshold_;  ///< per valid cell: max(k * range, floor)
   std::vector<int> parent_;       ///< union-find forest over the cells
   std::vector<int> set_of_, set_sizes_, set_order_, set_output_;  ///< cluster collection
+  std::vector<pcl::index_t*> cursor_;  ///< per output cluster: next index to write
 };
 
 }  // namespace pcl_movers

@@ -221,16 +221,18 @@ void RangeImageRegionGrowing<PointT>::segment(std::vector<pcl::PointIndices>& cl
   output_of.assign(set_sizes_.size(), -1);
   // The caller's vector is reused: its index vectors keep their capacity between frames.
   clusters.resize(set_order_.size());
+  // Each cluster gets its exact size up front and is filled through a write cursor.
+  cursor_.resize(set_order_.size());
   for (std::size_t o = 0; o < set_order_.size(); ++o) {
     output_of[set_order_[o]] = static_cast<int>(o);
     clusters[o].header = input_->header;
-    clusters[o].indices.clear();
-    clusters[o].indices.reserve(set_sizes_[set_order_[o]]);
+    clusters[o].indices.resize(set_sizes_[set_order_[o]]);
+    cursor_[o] = clusters[o].indices.data();
   }
   for (int i = 0; i < n; ++i) {
     if (range_[i] < 0.f) continue;
     const int out = output_of[set_of[i]];
-    if (out >= 0) clusters[out].indices.push_back(i);
+    if (out >= 0) *cursor_[out]++ = i;
   }
   deinitCompute();
 }
