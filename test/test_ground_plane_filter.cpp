@@ -500,6 +500,45 @@ TEST(GroundPlaneFilter, ReusedFilterMatchesAFreshOne) {
   }
 }
 
+TEST(GroundPlaneFilter, IndicesActLikeRemovedPoints) {
+  // Points left out by setIndices() must be absent for every part of the filter, the local-slope
+  // test's column neighbours included: the ground found with indices equals the ground of the
+  // same cloud with the left-out cells set to NaN. Every fourth row band is left out, so many
+  // slope tests lose a neighbour; a bush makes the slope test reject points.
+  const auto terrain = [](float, float) { return -kSensorHeight; };
+  const auto object = [](float x, float y) { return bush(x, y, 6.f, 9.f, -2.f, 2.f); };
+  const Scene scene = castOrganized(terrain, object);
+  const Cloud& cloud = *scene.cloud;
+  pcl::IndicesPtr kept(new pcl::Indices);
+  Cloud::Ptr masked(new Cloud(cloud));
+  for (std::uint32_t row = 0; row < cloud.height; ++row)
+    for (std::uint32_t col = 0; col < cloud.width; ++col) {
+      const int idx = static_cast<int>(row * cloud.width + col);
+      if (row % 4 == 1)
+        (*masked)[idx].x = (*masked)[idx].y = (*masked)[idx].z =
+            std::numeric_limits<float>::quiet_NaN();
+      else
+        kept->push_back(idx);
+    }
+  GroundPlaneFilter<pcl::PointXYZ> filter;
+  filter.setNegative(true);
+  filter.setInputCloud(scene.cloud);
+  filter.setIndices(kept);
+  pcl::Indices with_indices;
+  filter.filter(with_indices);
+  const pcl::Indices expected = groundOf(masked);
+  EXPECT_GT(expected.size(), kept->size() / 2);
+  EXPECT_EQ(with_indices, expected);
+  // The slope test is active on this input (it rejects bush points the plane test keeps).
+  GroundPlaneFilter<pcl::PointXYZ> plane_only;
+  plane_only.setNegative(true);
+  plane_only.setLocalSlopeCheck(false);
+  plane_only.setInputCloud(masked);
+  pcl::Indices plane_ground;
+  plane_only.filter(plane_ground);
+  EXPECT_GT(plane_ground.size(), expected.size() + 100);
+}
+
 TEST(GroundPlaneFilter, EmptyAndNanOnlyInputs) {
   GroundPlaneFilter<pcl::PointXYZ> filter(true);
   Cloud::Ptr empty(new Cloud);

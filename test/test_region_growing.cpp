@@ -232,6 +232,41 @@ TEST(RangeImageRegionGrowing, ClusterSizeLimits) {
   EXPECT_EQ(clusters[0].indices, all[1].indices);
 }
 
+TEST(RangeImageRegionGrowing, ReusedSegmenterAndOutputMatchFreshOnes) {
+  // segment() reuses its work buffers and the caller's cluster vector (the index vectors keep
+  // their capacity between frames): a frame with many clusters followed by one with fewer, and
+  // back, must give exactly what a fresh segmenter writes into an empty vector.
+  std::vector<Box> many;
+  for (int b = 0; b < 6; ++b) {
+    const float x = 6.f + 3.f * static_cast<float>(b);
+    many.push_back({{x, -8.f + 3.f * static_cast<float>(b), -1.f},
+                    {x + 1.f, -7.f + 3.f * static_cast<float>(b), 0.5f}});
+  }
+  const auto frame_a = rayCast(many);
+  const auto frame_b = rayCast({{{8.f, -1.f, -1.f}, {12.f, 1.f, 0.5f}}});
+  frame_a->header.frame_id = "a";
+  frame_b->header.frame_id = "b";
+  RangeImageRegionGrowing<pcl::PointXYZ> reused;
+  reused.setBridgeLength(0.5f);
+  std::vector<pcl::PointIndices> clusters;
+  for (const auto& frame : {frame_a, frame_b, frame_a, frame_b}) {
+    RangeImageRegionGrowing<pcl::PointXYZ> fresh;
+    fresh.setBridgeLength(0.5f);
+    fresh.setInputCloud(frame);
+    std::vector<pcl::PointIndices> expected;
+    fresh.segment(expected);
+    reused.setInputCloud(frame);
+    reused.segment(clusters);
+    ASSERT_EQ(clusters.size(), expected.size());
+    for (std::size_t c = 0; c < clusters.size(); ++c) {
+      EXPECT_EQ(clusters[c].indices, expected[c].indices);
+      EXPECT_EQ(clusters[c].header.frame_id, frame->header.frame_id);
+    }
+  }
+  EXPECT_EQ(segment(frame_a, 0.05f, true, 2, 0.5f).size(), 6u);
+  EXPECT_EQ(segment(frame_b, 0.05f, true, 2, 0.5f).size(), 1u);
+}
+
 TEST(RangeImageRegionGrowing, IndicesRestrictTheInput) {
   const auto cloud = rayCast({{{8.f, -1.f, -1.f}, {12.f, 1.f, 0.5f}}});
   const auto all = segment(cloud);

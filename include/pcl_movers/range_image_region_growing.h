@@ -99,7 +99,9 @@ class RangeImageRegionGrowing : public pcl::PCLBase<PointT> {
   void setMaxClusterSize(int n) { max_cluster_size_ = n; }
   int getMaxClusterSize() const { return max_cluster_size_; }
 
-  /** \brief Segments the input into clusters (see the class description for errors). */
+  /** \brief Segments the input into clusters (see the class description for errors). The
+   * previous content of `clusters` is replaced; its index vectors are reused, so passing the
+   * same vector frame after frame avoids reallocating them. */
   void segment(std::vector<pcl::PointIndices>& clusters);
 
  protected:
@@ -115,8 +117,11 @@ class RangeImageRegionGrowing : public pcl::PCLBase<PointT> {
   int max_cluster_size_ = std::numeric_limits<int>::max();
 
   // Work buffers kept between calls so a sequence of frames does not reallocate.
-  std::vector<float> range_;
-  std::vector<int> parent_;
+  std::vector<float> range_;      ///< per cell: range, < 0 when the cell does not take part
+  std::vector<float> threshold_;  ///< per valid cell: max(k * range, floor)
+  std::vector<int> parent_;       ///< union-find forest over the cells
+  std::vector<int> set_of_, set_sizes_, set_order_, set_output_;  ///< cluster collection
+  std::vector<pcl::index_t*> cursor_;  ///< per output cluster: next index to write
 };
 
 }  // namespace pcl_movers

@@ -284,9 +284,14 @@ void GroundPlaneFilter<PointT>::applyFilter(pcl::Indices& indices) {
       if (count < min_points_per_cell_) continue;
 
       // Only points near the prior can be this cell's ground: keeps roofs and walls out.
-      positions.clear();
-      for (int j = cell_start[cell]; j < cell_start[cell + 1]; ++j)
-        if (std::abs(prior.height(cell_xyz_[j])) < band) positions.push_back(j);
+      // Written unconditionally, kept by advancing the count: no branch per point.
+      positions.resize(count);
+      std::size_t kept_near = 0;
+      for (int j = cell_start[cell]; j < cell_start[cell + 1]; ++j) {
+        positions[kept_near] = j;
+        kept_near += std::abs(prior.height(cell_xyz_[j])) < band;
+      }
+      positions.resize(kept_near);
       if (static_cast<int>(positions.size()) < min_points_per_cell_) continue;
       const Eigen::Vector2f c2 = origin.head<2>() + centre_r * sector_dirs[s];
       Plane fitted;
@@ -328,36 +333,41 @@ void GroundPlaneFilter<PointT>::applyFilter(pcl::Indices& indices) {
       height_[cell_points[j]] = plane.height(cell_xyz_[j]);
   }
   const int width = static_cast<int>(input_->width);
-  const int image_size = static_cast<int>(input_->size());
   const float tan_slope = std::tan(std::min(max_local_slope_, 1.5707f));
   const float tan2_slope = tan_slope * tan_slope;
   // Steep rise between a ground candidate and its column neighbours (see the class description).
-  auto steep = [&](int idx) {
-    const float h = height_[idx];
-    const Eigen::Vector3f p = (*input_)[idx].getVector3fMap();
-    for (const int dr : {-1, 1}) {
-      // The row above / below exists iff its index stays inside the image (width * rows
-      // points): no integer division per candidate to find the row.
-      const int j = idx + dr * width;
-      if (j < 0 || j >= image_size) continue;
-      const float hj = height_[j];
-      if (!(std::abs(hj) <= local_slope_band_)) continue;  // NaN, or an object on the ground
-      const float rise = std::abs(hj - h) - range_noise_;
-      if (rise <= 0.f) continue;
-      const Eigen::Vector3f q = (*input_)[j].getVector3fMap();
-      // rise > tan(slope) * horizontal distance, squared (both sides >= 0): no square root.
-      if (rise * rise > tan2_slope * (q - p).template head<2>().squaredNorm()) return true;
-    }
-    return false;
+  // Neighbour j is steep when it is near its plane (|h_j| <= band: not NaN, not an object on the
+  // ground) and its rise, minus the noise, exceeds tan(slope) times the horizontal distance
+  // (squared, both sides >= 0: no square root). Evaluated without branches: NaN heights make the
+  // comparisons false, and the outcomes along a row are too irregular to predict.
+  const float band = local_slope_band_;
+  const float noise = range_noise_;
+  auto steepTo = [&](int j, float h, float px, float py) {
+    const float hj = height_[j];
+    const float rise = std::abs(hj - h) - noise;
+    const float dx = (*input_)[j].x - px, dy = (*input_)[j].y - py;
+    return (std::abs(hj) <= band) & (rise > 0.f) & (rise * rise > tan2_slope * (dx * dx + dy * dy));
   };
   // Steep flags of the ground candidates; a flag counts only when a row neighbour (same beam,
   // next azimuth) is flagged too: vegetation and wall bases are rough over several columns, while
   // range noise on the road flags isolated points.
+  // The candidates are the cells with |height| < threshold: height_ is NaN for every cell that is
+  // not in indices_ or not finite, so one pass over the image finds them without reading
+  // indices_ or cell_of.
   if (slope_check) {
     steep_.assign(input_->size(), 0);
-    for (std::size_t k = 0; k < n; ++k) {
-      const int idx = (*indices_)[k];
-      if (cell_of[k] >= 0 && std::abs(height_[idx]) < distance_threshold_) steep_[idx] = steep(idx);
+    const int rows = static_cast<int>(input_->height);
+    for (int row = 0; row < rows; ++row) {
+      const bool up = row > 0, down = row + 1 < rows;
+      for (int idx = row * width; idx < (row + 1) * width; ++idx) {
+        const float h = height_[idx];
+        if (!(std::abs(h) < distance_threshold_)) continue;
+        const float px = (*input_)[idx].x, py = (*input_)[idx].y;
+        bool s = false;
+        if (up) s |= steepTo(idx - width, h, px, py);
+        if (down) s |= steepTo(idx + width, h, px, py);
+        steep_[idx] = s;
+      }
     }
   }
   auto rejected = [&](int idx) {

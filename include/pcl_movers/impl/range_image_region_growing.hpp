@@ -23,9 +23,12 @@ int RangeImageRegionGrowing<PointT>::findRoot(int i) {
 
 template <typename PointT>
 void RangeImageRegionGrowing<PointT>::segment(std::vector<pcl::PointIndices>& clusters) {
-  clusters.clear();
-  if (!initCompute()) return;
+  if (!initCompute()) {
+    clusters.clear();
+    return;
+  }
   if (input_->empty()) {
+    clusters.clear();
     deinitCompute();
     return;
   }
@@ -36,6 +39,7 @@ void RangeImageRegionGrowing<PointT>::segment(std::vector<pcl::PointIndices>& cl
         "(width %u, height %u, %zu points): region growing needs the range image (rows = beams); "
         "organize the scan first (pcl_movers::RangeImageOrganizer).\n",
         input_->width, input_->height, input_->size());
+    clusters.clear();
     deinitCompute();
     return;
   }
@@ -43,6 +47,7 @@ void RangeImageRegionGrowing<PointT>::segment(std::vector<pcl::PointIndices>& cl
     PCL_ERROR(
         "[pcl_movers::RangeImageRegionGrowing::segment] Depth threshold factor, floor and max gap "
         "must be >= 0.\n");
+    clusters.clear();
     deinitCompute();
     return;
   }
@@ -52,12 +57,21 @@ void RangeImageRegionGrowing<PointT>::segment(std::vector<pcl::PointIndices>& cl
   const int n = width * height;
   const Eigen::Vector3f origin = input_->sensor_origin_.template head<3>();
 
-  // range_ < 0 marks cells that do not take part (NaN, or not in indices_).
+  const float k = depth_threshold_factor_;
+  const float floor = min_depth_threshold_;
+  // range_ < 0 marks cells that do not take part (NaN, or not in indices_). threshold_ holds
+  // max(k * range, floor) of every valid cell, computed once: the depth rule of two cells,
+  // |r_a - r_b| <= max(k * min(r_a, r_b), floor), is then min(threshold_a, threshold_b) as
+  // k * r is increasing in r, with no multiplication per neighbour test.
   range_.assign(n, -1.f);
+  threshold_.resize(n);
   auto setRange = [&](int i) {
     const PointT& p = (*input_)[i];
-    if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))
-      range_[i] = (p.getVector3fMap() - origin).norm();
+    if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)) {
+      const float r = (p.getVector3fMap() - origin).norm();
+      range_[i] = r;
+      threshold_[i] = std::max(k * r, floor);
+    }
   };
   if (fake_indices_)
     for (int i = 0; i < n; ++i) setRange(i);
@@ -68,20 +82,26 @@ void RangeImageRegionGrowing<PointT>::segment(std::vector<pcl::PointIndices>& cl
   parent_.resize(n);
   for (int i = 0; i < n; ++i) parent_[i] = i;
 
-  const float k = depth_threshold_factor_;
-  const float floor = min_depth_threshold_;
   const bool wrap = wrap_around_ && width > 1;
   // Forward half of the 8-neighbourhood: right, down-left, down, down-right.
   constexpr int kDirections[4][2] = {{0, 1}, {1, -1}, {1, 0}, {1, 1}};
   const int max_steps = 1 + max_gap_;
 
-  auto join = [this](int a, int b) {
-    const int root_a = findRoot(a), root_b = findRoot(b);
-    // The smaller index becomes the root, so roots are the first cell of their cluster.
-    if (root_a < root_b)
-      parent_[root_b] = root_a;
-    else if (root_b < root_a)
-      parent_[root_a] = root_b;
+  // The root of a set is its smallest cell (the smaller root wins every union), so roots come
+  // first in row-major order. `root_i` caches the root of the cell being processed: only its own
+  // joins change its set while it is processed, so one findRoot per cell instead of one per join.
+  int root_i = 0;
+  auto join = [this, &root_i](int j) {
+    const int root_j = findRoot(j);
+    if (root_j < root_i) {
+      parent_[root_i] = root_j;
+      root_i = root_j;
+    } else if (root_i < root_j) {
+      parent_[root_j] = root_i;
+    }
+  };
+  auto depthMatch = [this](int a, int b) {
+    return std::abs(range_[a] - range_[b]) <= std::min(threshold_[a], threshold_[b]);
   };
   // Bridging along the row (see setBridgeLength()): the columns are assumed to span 360°, as in
   // RangeImageOrganizer's images, so one column is 2π / width rad of azimuth.
@@ -94,33 +114,62 @@ void RangeImageRegionGrowing<PointT>::segment(std::vector<pcl::PointIndices>& cl
       const int i = row * width + col;
       const float ra = range_[i];
       if (ra < 0.f) continue;
+      root_i = findRoot(i);
       if (bridge > 0.f) {
         // Along the row, look past empty cells and past nearer cells (a pole or a sign in front
         // of a car) for the first cell at about this cell's depth, up to `bridge` metres away.
-        // Compared in float first: near the sensor (ra -> 0) the quotient overflows an int.
-        const float columns = bridge / (ra * column_angle);
-        const int reach =
-            columns >= static_cast<float>(kMaxBridgeColumns)
-                ? kMaxBridgeColumns
-                : std::max(max_steps, std::min(kMaxBridgeColumns, static_cast<int>(columns) + 1));
-        const float threshold_a = std::max(k * ra, floor);
-        for (int step = 1; step <= reach; ++step) {
-          int c = col + step;
-          if (c >= width) {
-            if (!wrap) break;
-            c -= width;
+        const float nearest = ra - threshold_[i];
+        // The usual case first: the next cell is valid and not nearer, so the search ends there
+        // (a first step is within max_steps: no 3D check, and no reach to compute).
+        const float next = col + 1 < width ? range_[i + 1] : -1.f;
+        if (!(next < 0.f || next < nearest)) {
+          if (depthMatch(i, i + 1)) join(i + 1);
+        } else {
+          // Compared in float first: near the sensor (ra -> 0) the quotient overflows an int.
+          const float columns = bridge / (ra * column_angle);
+          const int reach =
+              columns >= static_cast<float>(kMaxBridgeColumns)
+                  ? kMaxBridgeColumns
+                  : std::max(max_steps, std::min(kMaxBridgeColumns, static_cast<int>(columns) + 1));
+          // From step 2 when the first cell was looked at above.
+          for (int step = col + 1 < width ? 2 : 1; step <= reach; ++step) {
+            int c = col + step;
+            if (c >= width) {
+              if (!wrap) break;
+              c -= width;
+            }
+            const int j = row * width + c;
+            if (j == i) break;
+            const float rb = range_[j];
+            if (rb < 0.f || rb < nearest) continue;  // empty or in front: look further
+            if (depthMatch(i, j) &&
+                (step <= max_steps ||
+                 ((*input_)[i].getVector3fMap() - (*input_)[j].getVector3fMap()).squaredNorm() <=
+                     bridge * bridge))
+              join(j);
+            break;
           }
-          const int j = row * width + c;
-          if (j == i) break;
-          const float rb = range_[j];
-          if (rb < 0.f || rb < ra - threshold_a) continue;  // empty or in front: look further
-          if (std::abs(ra - rb) <= std::max(k * std::min(ra, rb), floor) &&
-              (step <= max_steps ||
-               ((*input_)[i].getVector3fMap() - (*input_)[j].getVector3fMap()).squaredNorm() <=
-                   bridge * bridge))
-            join(i, j);
-          break;
         }
+      }
+      // Away from the first and last columns no scan leaves the image sideways: the cells of a
+      // direction are then i + step * stride, inside the image while below n.
+      if (col >= max_steps && col + max_steps < width) {
+        if (!(bridge > 0.f)) {
+          for (int j = i + 1; j <= i + max_steps; ++j) {
+            if (range_[j] < 0.f) continue;
+            if (depthMatch(i, j)) join(j);
+            break;
+          }
+        }
+        for (int dc = -1; dc <= 1; ++dc) {
+          const int stride = width + dc;
+          for (int step = 1, j = i + stride; step <= max_steps && j < n; ++step, j += stride) {
+            if (range_[j] < 0.f) continue;  // empty: look one cell further (gap bridging)
+            if (depthMatch(i, j)) join(j);
+            break;  // only the first valid cell in each direction is a neighbour
+          }
+        }
+        continue;
       }
       for (const auto& dir : kDirections) {
         if (bridge > 0.f && dir[0] == 0) continue;  // the row was handled above
@@ -133,46 +182,58 @@ void RangeImageRegionGrowing<PointT>::segment(std::vector<pcl::PointIndices>& cl
             c = (c + width) % width;
           }
           const int j = r * width + c;
-          if (j == i) break;  // a full turn on a tiny image
-          const float rb = range_[j];
-          if (rb < 0.f) continue;  // empty: look one cell further (gap bridging)
-          if (std::abs(ra - rb) <= std::max(k * std::min(ra, rb), floor)) join(i, j);
+          if (j == i) break;              // a full turn on a tiny image
+          if (range_[j] < 0.f) continue;  // empty: look one cell further (gap bridging)
+          if (depthMatch(i, j)) join(j);
           break;  // only the first valid cell in each direction is a neighbour
         }
       }
     }
   }
 
-  // Collect: roots come first in row-major order, so one pass numbers the clusters.
-  std::vector<int> cluster_of(n, -1);
-  std::vector<int> sizes;
+  // Collect. Every parent is a smaller cell of the same set (roots are their set's smallest
+  // cell, path halving only shortens links), so in row-major order a cell's parent is numbered
+  // before the cell: one pass numbers the sets with no root search. The sizes then give the
+  // output order and every cluster's exact size, so the output is filled in one pass with no
+  // reallocation and no sort of the index vectors themselves.
+  std::vector<int>& set_of = set_of_;
+  set_of.resize(n);
+  set_sizes_.clear();
   for (int i = 0; i < n; ++i) {
     if (range_[i] < 0.f) continue;
-    const int root = findRoot(i);
-    if (cluster_of[root] < 0) {
-      cluster_of[root] = static_cast<int>(sizes.size());
-      sizes.push_back(0);
+    const int p = parent_[i];
+    if (p == i) {
+      set_of[i] = static_cast<int>(set_sizes_.size());
+      set_sizes_.push_back(1);
+    } else {
+      set_of[i] = set_of[p];
+      ++set_sizes_[set_of[i]];
     }
-    cluster_of[i] = cluster_of[root];
-    ++sizes[cluster_of[i]];
   }
-  std::vector<int> output_of(sizes.size(), -1);
-  for (std::size_t c = 0; c < sizes.size(); ++c) {
-    if (sizes[c] < min_cluster_size_ || sizes[c] > max_cluster_size_) continue;
-    output_of[c] = static_cast<int>(clusters.size());
-    clusters.emplace_back();
-    clusters.back().header = input_->header;
-    clusters.back().indices.reserve(sizes[c]);
+  // Kept sets, largest first; ties in order of their first cell (as a stable sort by size).
+  set_order_.clear();
+  for (std::size_t c = 0; c < set_sizes_.size(); ++c)
+    if (set_sizes_[c] >= min_cluster_size_ && set_sizes_[c] <= max_cluster_size_)
+      set_order_.push_back(static_cast<int>(c));
+  std::stable_sort(set_order_.begin(), set_order_.end(),
+                   [this](int a, int b) { return set_sizes_[a] > set_sizes_[b]; });
+  std::vector<int>& output_of = set_output_;
+  output_of.assign(set_sizes_.size(), -1);
+  // The caller's vector is reused: its index vectors keep their capacity between frames.
+  clusters.resize(set_order_.size());
+  // Each cluster gets its exact size up front and is filled through a write cursor.
+  cursor_.resize(set_order_.size());
+  for (std::size_t o = 0; o < set_order_.size(); ++o) {
+    output_of[set_order_[o]] = static_cast<int>(o);
+    clusters[o].header = input_->header;
+    clusters[o].indices.resize(set_sizes_[set_order_[o]]);
+    cursor_[o] = clusters[o].indices.data();
   }
   for (int i = 0; i < n; ++i) {
-    if (cluster_of[i] < 0) continue;
-    const int out = output_of[cluster_of[i]];
-    if (out >= 0) clusters[out].indices.push_back(i);
+    if (range_[i] < 0.f) continue;
+    const int out = output_of[set_of[i]];
+    if (out >= 0) *cursor_[out]++ = i;
   }
-  std::stable_sort(clusters.begin(), clusters.end(),
-                   [](const pcl::PointIndices& a, const pcl::PointIndices& b) {
-                     return a.indices.size() > b.indices.size();
-                   });
   deinitCompute();
 }
 
