@@ -97,6 +97,32 @@ void refinePeak(int dims, const bool* active, const std::function<float(const in
 }
 
 namespace {
+/** The workspace of the last registration object destroyed on this thread. Creating one object
+ * per pair (as ICP/NDT users do, and the benchmarks) would otherwise allocate and free the
+ * buffers, FFT plans and target caches on every align(); freeing ~100 kB also makes glibc
+ * return the heap top to the kernel (brk, TLB flushes), which cost as much as the search. */
+thread_local std::shared_ptr<BhattacharyaWorkspace> t_spare_workspace;
+}  // namespace
+
+std::shared_ptr<BhattacharyaWorkspace> acquireWorkspace() {
+  std::shared_ptr<BhattacharyaWorkspace> w = std::move(t_spare_workspace);
+  t_spare_workspace.reset();
+  if (!w) return std::make_shared<BhattacharyaWorkspace>();
+  // The content caches belong to the previous object: a new object could get the same target
+  // cloud address. (The FFT's target spectra are keyed by SurfaceDensity::revision(), unique in
+  // the process, and stay valid.)
+  w->own_target_valid = false;
+  w->own_target_cloud = nullptr;
+  w->own_target_key.clear();
+  return w;
+}
+
+void releaseWorkspace(std::shared_ptr<BhattacharyaWorkspace>& work) {
+  if (work && work.use_count() == 1) t_spare_workspace = std::move(work);
+  work.reset();
+}
+
+namespace {
 constexpr float kShadowAzBin = 0.12f * 3.14159265f / 180.f;
 constexpr float kShadowElBin = 0.3f * 3.14159265f / 180.f;
 constexpr float kTwoPi = 6.28318531f;

@@ -673,3 +673,34 @@ TEST(BhattacharyaRegistration, OccludersImproveOccludedSimulatedPairs) {
   EXPECT_GT(ok_with, ok_without);
   EXPECT_LT(sum_with, sum_without);
 }
+
+TEST(BhattacharyaRegistration, ObjectsCreatedInTurnGiveTheResultsOfOneReusedObject) {
+  // Each destroyed object hands its workspace (buffers, FFT plans, target caches) to the next
+  // one on the thread: a new object must not see the previous one's target, even when the
+  // target cloud is the same object with new content.
+  const Eigen::Vector3f sensor(0.f, 0.f, 1.73f);
+  auto target = pcl::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
+  std::vector<Eigen::Matrix4f> fresh, reused;
+  BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ> kept;
+  kept.setYawSamples(5);
+  for (int i = 0; i < 3; ++i) {
+    *target = *vehicle(18.f + 1.5f * i, 2.f - i, 0.2f * i, sensor, 0.f, 1 + i);
+    auto source = vehicle(18.7f + 1.5f * i, 2.3f - i, 0.2f * i, sensor, 0.3f, 7 + i);
+    pcl::PointCloud<pcl::PointXYZ> out;
+    {
+      BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ> reg;
+      reg.setYawSamples(5);
+      reg.setInputSource(source);
+      reg.setInputTarget(target);
+      reg.align(out);
+      ASSERT_TRUE(reg.hasConverged());
+      fresh.push_back(reg.getFinalTransformation());
+    }
+    kept.setInputSource(source);
+    kept.setInputTarget(target);
+    kept.align(out);
+    reused.push_back(kept.getFinalTransformation());
+    EXPECT_LT((fresh.back().block<2, 1>(0, 3) - Eigen::Vector2f(-0.7f, -0.3f)).norm(), 0.1f);
+    EXPECT_TRUE(fresh.back().isApprox(reused.back(), 1e-5f)) << "pair " << i;
+  }
+}

@@ -17,6 +17,12 @@ namespace pcl_movers {
 
 namespace detail {
 struct BhattacharyaWorkspace;
+/** \brief A workspace for a new registration object: the one the last object destroyed on this
+ * thread left behind (its buffers and FFT plans already sized), or a new one. */
+std::shared_ptr<BhattacharyaWorkspace> acquireWorkspace();
+/** \brief Keeps `work` (if no copy of its object still uses it) for the next object created on
+ * this thread: a registration per object pair then costs no heap traffic once warm. */
+void releaseWorkspace(std::shared_ptr<BhattacharyaWorkspace>& work);
 }  // namespace detail
 
 /** \brief The Bhattacharyya similarity B over the searched motions of the last align().
@@ -84,7 +90,7 @@ class BhattacharyaRegistration : public pcl::Registration<PointSource, PointTarg
       pcl::shared_ptr<const BhattacharyaRegistration<PointSource, PointTarget, Scalar>>;
 
   BhattacharyaRegistration();
-  ~BhattacharyaRegistration() override = default;
+  ~BhattacharyaRegistration() override { detail::releaseWorkspace(work_); }
 
   /** \brief Unlike the base class, an empty cloud is accepted; align() then reports
    * hasConverged() == false instead of silently reusing the previous cloud. */
@@ -285,7 +291,8 @@ class BhattacharyaRegistration : public pcl::Registration<PointSource, PointTarg
   PointCloudSourceConstPtr source_occluders_;
   PointCloudTargetConstPtr target_occluders_;
   /** Buffers, FFT plans and the target caches reused between align() calls (no heap traffic
-   * per call once warm); shared by copies of this object. */
+   * per call once warm); shared by copies of this object, and handed on to the next object
+   * created on the thread when this one is destroyed (see detail::acquireWorkspace()). */
   std::shared_ptr<detail::BhattacharyaWorkspace> work_;
 
   SurfaceDensity::ConstPtr target_density_;

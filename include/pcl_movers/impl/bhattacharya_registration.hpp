@@ -108,7 +108,7 @@ BhattacharyaRegistration<PointSource, PointTarget, Scalar>::BhattacharyaRegistra
   // No kd-tree is ever needed: stop pcl::Registration::initCompute() from building one.
   this->force_no_recompute_ = true;
   this->force_no_recompute_reciprocal_ = true;
-  work_ = std::make_shared<detail::BhattacharyaWorkspace>();
+  work_ = detail::acquireWorkspace();
 }
 
 template <typename PointSource, typename PointTarget, typename Scalar>
