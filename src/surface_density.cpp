@@ -102,12 +102,14 @@ void SurfaceDensity::resize(int nx, int ny, int nz) {
   nz_ = nz;
   data_.assign(static_cast<std::size_t>(nx) * ny * nz, 0.f);
   sqrt_.assign(data_.size(), 0.f);
+  mass_ = 0.f;
   revision_ = nextRevision();
 }
 
 void SurfaceDensity::clear() {
   std::fill(data_.begin(), data_.end(), 0.f);
   std::fill(sqrt_.begin(), sqrt_.end(), 0.f);
+  mass_ = 0.f;
   revision_ = nextRevision();
 }
 
@@ -116,6 +118,9 @@ void SurfaceDensity::updateSqrt() {
   revision_ = nextRevision();
   sqrt_.resize(data_.size());
   for (std::size_t i = 0; i < data_.size(); ++i) sqrt_[i] = std::sqrt(data_[i]);
+  double mass = 0.0;
+  for (float v : data_) mass += v;
+  mass_ = static_cast<float>(mass);
 }
 
 void SurfaceDensity::setValues(const std::vector<float>& values) {
@@ -326,8 +331,10 @@ SurfaceDensity SurfaceDensity::shifted(const Eigen::Vector3f& offset) const {
   const float sx = offset.x() / resolution_, sy = offset.y() / resolution_,
               sz = offset.z() / resolution_z_;
   // A shift of more than the grid moves everything out (and would overflow the casts below).
-  if (!(std::abs(sx) < nx_ + 1.f && std::abs(sy) < ny_ + 1.f && std::abs(sz) < nz_ + 1.f))
+  if (!(std::abs(sx) < nx_ + 1.f && std::abs(sy) < ny_ + 1.f && std::abs(sz) < nz_ + 1.f)) {
+    out.updateSqrt();  // square roots, mass and revision of the now empty grid
     return out;
+  }
   const int bx = static_cast<int>(std::floor(sx)), by = static_cast<int>(std::floor(sy)),
             bz = static_cast<int>(std::floor(sz));
   const float fx = sx - bx, fy = sy - by, fz = sz - bz;
@@ -353,12 +360,6 @@ SurfaceDensity SurfaceDensity::shifted(const Eigen::Vector3f& offset) const {
       }
   out.updateSqrt();
   return out;
-}
-
-float SurfaceDensity::totalMass() const {
-  double s = 0.0;
-  for (float v : data_) s += v;
-  return static_cast<float>(s);
 }
 
 float SurfaceDensity::bhattacharyya(const SurfaceDensity& a, const SurfaceDensity& b) {

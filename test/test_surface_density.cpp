@@ -279,3 +279,36 @@ TEST(SurfaceDensity, MergedGaussiansKeepMassMomentsAndTheDensity) {
   copy.computeFromGaussians(mp, sxy, sz, w, centre);
   EXPECT_EQ(copy.values(), exact.values());
 }
+
+TEST(SurfaceDensity, MassAndSquareRootsFollowEveryChange) {
+  // totalMass() is kept with the values: check it after each kind of change.
+  const Eigen::Vector3f centre(12.f, -2.f, 1.f);
+  SurfaceDensity d;
+  EXPECT_EQ(d.totalMass(), 0.f);
+  d.compute(boxSurface(centre, 5), Eigen::Vector3f::Zero(), centre);
+  auto sum = [](const SurfaceDensity& s) {
+    double m = 0.0;
+    for (float v : s.values()) m += v;
+    return static_cast<float>(m);
+  };
+  EXPECT_NEAR(d.totalMass(), 1.f, 1e-3f);
+  EXPECT_FLOAT_EQ(d.totalMass(), sum(d));
+  const SurfaceDensity copy = d;
+  EXPECT_FLOAT_EQ(copy.totalMass(), d.totalMass());
+  // Moved out entirely: no mass and no square roots left.
+  const SurfaceDensity gone = d.shifted(Eigen::Vector3f(100.f, 0.f, 0.f));
+  EXPECT_EQ(gone.totalMass(), 0.f);
+  for (float v : gone.sqrtValues()) ASSERT_EQ(v, 0.f);
+  const SurfaceDensity half = d.shifted(Eigen::Vector3f(2.9f, 0.f, 0.f));
+  EXPECT_FLOAT_EQ(half.totalMass(), sum(half));
+  EXPECT_LT(half.totalMass(), 0.9f);
+  std::vector<float> values(d.size(), 0.f);
+  values[7] = 0.25f;
+  d.setValues(values);
+  EXPECT_FLOAT_EQ(d.totalMass(), 0.25f);
+  d.clear();
+  EXPECT_EQ(d.totalMass(), 0.f);
+  EXPECT_TRUE(d.empty());
+  d.setGridSize(5, 5, 5);
+  EXPECT_TRUE(d.empty());
+}

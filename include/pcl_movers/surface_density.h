@@ -150,8 +150,10 @@ class SurfaceDensity {
   /** \brief World position of a cell centre. */
   Eigen::Vector3f cellCentre(int ix, int iy, int iz) const;
 
-  /** \brief Σ ρ over the grid: 1 when every Gaussian lies inside, less when mass fell outside. */
-  float totalMass() const;
+  /** \brief Σ ρ over the grid: 1 when every Gaussian lies inside, less when mass fell outside.
+   * Kept with the values (computed once per change, not per call: registrations ask for it on
+   * every align()). */
+  float totalMass() const { return mass_; }
   /** \brief True when the grid holds no mass. */
   bool empty() const { return totalMass() <= 0.f; }
 
@@ -179,6 +181,7 @@ class SurfaceDensity {
   std::vector<float> data_;
   std::vector<float> sqrt_;
   std::uint64_t revision_ = 0;
+  float mass_ = 0.f;
 };
 
 }  // namespace pcl_movers
