@@ -7,6 +7,8 @@
  *   bench_registration [gbench flags]   Google Benchmark timings of one align() per method
  *   bench_registration --failures [VARIANT]   every failed simulated pair (diagnosis; VARIANT
  *                                 containing "occ" hands the occluder returns over)
+ *   bench_registration --quick [FILE]   the Bhattacharyya rows of --report with ICP/NDT times
+ *                                 (before/after checks; FILE gets every trial's error and B)
  *   --slices N (before the above)   N vertical slices for every Bhattacharyya method
  *
  * SPDX-License-Identifier: BSD-3-Clause
@@ -467,6 +469,67 @@ int report() {
   return 0;
 }
 
+/** The Bhattacharyya methods' quality and time, with ICP and NDT timed side by side (a fast
+ * subset of --report for before/after comparisons of code changes; `dump`, when given, receives
+ * every trial's error and B so two builds can be compared pair by pair). */
+int quick(const char* dump) {
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);
+  pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
+  const auto all = methods();
+  // BR 1 yaw, BR 5 yaws, ICP, NDT, BR 5 yaws with occluders.
+  const std::vector<Method> ms = {all[0], all[1], all[2], all[4], all[5]};
+  std::FILE* out = dump ? std::fopen(dump, "w") : nullptr;
+  auto summary = [&](const char* set, const std::vector<RegistrationPair>& pairs, float threshold,
+                     unsigned seed) {
+    const auto trials = makeTrials(pairs.size(), seed);
+    for (const auto& m : ms) {
+      const Result r = run(m, pairs, trials);
+      int ok = 0, ok25 = 0, n25 = 0;
+      double total = 0.0;
+      for (std::size_t i = 0; i < r.err.size(); ++i) {
+        ok += r.err[i] < threshold;
+        if (r.bin[i] < 3) {
+          ok25 += r.err[i] < threshold;
+          ++n25;
+        }
+        total += r.ms[i];
+        if (out)
+          std::fprintf(out, "%s\t%s\t%zu\t%.5f\t%.5f\n", set, m.name.c_str(), i, r.err[i],
+                       r.similarity[i]);
+      }
+      std::printf(
+          "%-9s | %-45s | success %s | <=2.5 m %s | median err %.4f | median %.3f ms | "
+          "mean %.3f ms\n",
+          set, m.name.c_str(), pct(ok, static_cast<int>(r.err.size())).c_str(),
+          pct(ok25, n25).c_str(), median(r.err), median(r.ms),
+          total / std::max<std::size_t>(1, r.ms.size()));
+    }
+  };
+  const auto sim = pcl_movers::eval::makeSimulatedPairs(300, 7);
+  summary("simulated", sim, 0.1f, 11);
+  const std::string folder = std::string(PCL_MOVERS_SHARED_DATA) + "/kitti-tracking-0000-a";
+  std::vector<RegistrationPair> real;
+  if (std::ifstream(folder + "/poses.txt")) {
+    real = pcl_movers::eval::loadKittiPairs(folder, {0, 1, 3}, {1, 3}, 2);
+    summary("real", real, 0.3f, 13);
+  }
+  const auto sim_diff = pcl_movers::eval::makeSimulatedDifferentPairs(300, 17);
+  const auto pos_sim = similarities(sim, 5, 19, 1.f);
+  const auto neg_sim = similarities(sim_diff, 5, 23, 1.f);
+  std::printf("ROC AUC simulated %.3f (median B %.3f / %.3f)",
+              pcl_movers::eval::rocAuc(pos_sim, neg_sim), median(pos_sim), median(neg_sim));
+  if (!real.empty()) {
+    const auto real_diff = pcl_movers::eval::loadKittiDifferentPairs(folder, {0, 1, 3}, 1, 2);
+    const auto pos_real = similarities(real, 5, 29, 1.f);
+    const auto neg_real = similarities(real_diff, 5, 31, 1.f);
+    std::printf(", real %.3f (median B %.3f / %.3f)", pcl_movers::eval::rocAuc(pos_real, neg_real),
+                median(pos_real), median(neg_real));
+  }
+  std::printf("\n");
+  if (out) std::fclose(out);
+  return 0;
+}
+
 /** Every failed simulated pair of the 5-yaw-layer method with what went wrong (diagnosis). */
 int failures(const char* variant) {
   pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
@@ -766,6 +829,8 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i)
     if (std::strcmp(argv[i], "--report") == 0)
       return report();
+    else if (std::strcmp(argv[i], "--quick") == 0)
+      return quick(i + 1 < argc ? argv[i + 1] : nullptr);
     else if (std::strcmp(argv[i], "--calibrate") == 0)
       return calibrate();
     else if (std::strcmp(argv[i], "--probe") == 0)

@@ -97,6 +97,32 @@ void refinePeak(int dims, const bool* active, const std::function<float(const in
 }
 
 namespace {
+/** The workspace of the last registration object destroyed on this thread. Creating one object
+ * per pair (as ICP/NDT users do, and the benchmarks) would otherwise allocate and free the
+ * buffers, FFT plans and target caches on every align(); freeing ~100 kB also makes glibc
+ * return the heap top to the kernel (brk, TLB flushes), which cost as much as the search. */
+thread_local std::shared_ptr<BhattacharyaWorkspace> t_spare_workspace;
+}  // namespace
+
+std::shared_ptr<BhattacharyaWorkspace> acquireWorkspace() {
+  std::shared_ptr<BhattacharyaWorkspace> w = std::move(t_spare_workspace);
+  t_spare_workspace.reset();
+  if (!w) return std::make_shared<BhattacharyaWorkspace>();
+  // The content caches belong to the previous object: a new object could get the same target
+  // cloud address. (The FFT's target spectra are keyed by SurfaceDensity::revision(), unique in
+  // the process, and stay valid.)
+  w->own_target_valid = false;
+  w->own_target_cloud = nullptr;
+  w->own_target_key.clear();
+  return w;
+}
+
+void releaseWorkspace(std::shared_ptr<BhattacharyaWorkspace>& work) {
+  if (work && work.use_count() == 1) t_spare_workspace = std::move(work);
+  work.reset();
+}
+
+namespace {
 constexpr float kShadowAzBin = 0.12f * 3.14159265f / 180.f;
 constexpr float kShadowElBin = 0.3f * 3.14159265f / 180.f;
 constexpr float kTwoPi = 6.28318531f;
@@ -165,6 +191,14 @@ bool ShadowImage::shadowed(const Eigen::Vector3f& p, float margin) const {
 void buildSourceLayer(SourceLayer& layer, const std::vector<Eigen::Vector3f>& points,
                       const std::vector<float>& sigmas, const SurfaceDensity& target, int nr,
                       int nrz) {
+  static const std::vector<float> kNoWeights;
+  buildSourceLayer(layer, points, sigmas, sigmas, kNoWeights, target, nr, nrz);
+}
+
+void buildSourceLayer(SourceLayer& layer, const std::vector<Eigen::Vector3f>& points,
+                      const std::vector<float>& sigmas_xy, const std::vector<float>& sigmas_z,
+                      const std::vector<float>& weights, const SurfaceDensity& target, int nr,
+                      int nrz) {
   const int nx = target.getNx(), ny = target.getNy(), nz = target.getNz();
   const float res = target.getResolution(), res_z = target.getResolutionZ();
   const Eigen::Vector3f tlo =
@@ -172,7 +206,7 @@ void buildSourceLayer(SourceLayer& layer, const std::vector<Eigen::Vector3f>& po
   Eigen::Vector3f lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
   Eigen::Vector3f hi = -lo;
   for (std::size_t i = 0; i < points.size(); ++i) {
-    const Eigen::Vector3f reach = Eigen::Vector3f::Constant(3.f * sigmas[i]);
+    const Eigen::Vector3f reach(3.f * sigmas_xy[i], 3.f * sigmas_xy[i], 3.f * sigmas_z[i]);
     lo = lo.cwiseMin(points[i] - reach);
     hi = hi.cwiseMax(points[i] + reach);
   }
@@ -206,7 +240,7 @@ void buildSourceLayer(SourceLayer& layer, const std::vector<Eigen::Vector3f>& po
   const Eigen::Vector3f centre =
       tlo +
       Eigen::Vector3f((ax + 0.5f * sx) * res, (ay + 0.5f * sy) * res, (az + 0.5f * sz) * res_z);
-  d.computeFromPoints(points, sigmas, centre);
+  d.computeFromGaussians(points, sigmas_xy, sigmas_z, weights, centre);
   const std::vector<float>& sq = d.sqrtValues();
   for (int i = 0; i < static_cast<int>(sq.size()); ++i)
     if (sq[static_cast<std::size_t>(i)] > 0.f) layer.nonzero.push_back(i);

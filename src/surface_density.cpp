@@ -102,12 +102,14 @@ void SurfaceDensity::resize(int nx, int ny, int nz) {
   nz_ = nz;
   data_.assign(static_cast<std::size_t>(nx) * ny * nz, 0.f);
   sqrt_.assign(data_.size(), 0.f);
+  mass_ = 0.f;
   revision_ = nextRevision();
 }
 
 void SurfaceDensity::clear() {
   std::fill(data_.begin(), data_.end(), 0.f);
   std::fill(sqrt_.begin(), sqrt_.end(), 0.f);
+  mass_ = 0.f;
   revision_ = nextRevision();
 }
 
@@ -116,6 +118,9 @@ void SurfaceDensity::updateSqrt() {
   revision_ = nextRevision();
   sqrt_.resize(data_.size());
   for (std::size_t i = 0; i < data_.size(); ++i) sqrt_[i] = std::sqrt(data_[i]);
+  double mass = 0.0;
+  for (float v : data_) mass += v;
+  mass_ = static_cast<float>(mass);
 }
 
 void SurfaceDensity::setValues(const std::vector<float>& values) {
@@ -143,34 +148,52 @@ void SurfaceDensity::computeFromPoints(const std::vector<Eigen::Vector3f>& point
                                        const Eigen::Vector3f& centre) {
   if (points.size() != sigmas.size())
     throw std::invalid_argument("SurfaceDensity::computeFromPoints: points and sigmas differ");
+  static const std::vector<float> kNoWeights;
+  computeFromGaussians(points, sigmas, sigmas, kNoWeights, centre);
+}
+
+void SurfaceDensity::computeFromGaussians(const std::vector<Eigen::Vector3f>& points,
+                                          const std::vector<float>& sigmas_xy,
+                                          const std::vector<float>& sigmas_z,
+                                          const std::vector<float>& weights,
+                                          const Eigen::Vector3f& centre) {
+  if (points.size() != sigmas_xy.size() || points.size() != sigmas_z.size() ||
+      (!weights.empty() && weights.size() != points.size()))
+    throw std::invalid_argument(
+        "SurfaceDensity::computeFromGaussians: points, sigmas and weights differ in size");
   if (!(resolution_ > 0.f) || !(resolution_z_ > 0.f))
     throw std::invalid_argument("SurfaceDensity: resolutions must be positive");
   centre_ = centre;
   std::fill(data_.begin(), data_.end(), 0.f);
 
-  std::size_t valid = 0;
+  auto valid = [&](std::size_t i) {
+    return points[i].allFinite() && sigmas_xy[i] > 0.f && std::isfinite(sigmas_xy[i]) &&
+           sigmas_z[i] > 0.f && std::isfinite(sigmas_z[i]) &&
+           (weights.empty() || (weights[i] > 0.f && std::isfinite(weights[i])));
+  };
+  double total_weight = 0.0;
   for (std::size_t i = 0; i < points.size(); ++i)
-    if (points[i].allFinite() && sigmas[i] > 0.f && std::isfinite(sigmas[i])) ++valid;
-  if (valid == 0) {
+    if (valid(i)) total_weight += weights.empty() ? 1.0 : static_cast<double>(weights[i]);
+  if (!(total_weight > 0.0)) {
     updateSqrt();
     return;
   }
-  const float mass = 1.f / static_cast<float>(valid);
+  const float unit_mass = static_cast<float>(1.0 / total_weight);
   // Lower corner of cell 0 on each axis.
   const float ox = centre.x() - 0.5f * nx_ * resolution_;
   const float oy = centre.y() - 0.5f * ny_ * resolution_;
   const float oz = centre.z() - 0.5f * nz_ * resolution_z_;
   AxisWeights wx, wy, wz;
   for (std::size_t i = 0; i < points.size(); ++i) {
+    if (!valid(i)) continue;
     const Eigen::Vector3f& p = points[i];
-    const float s = sigmas[i];
-    if (!p.allFinite() || !(s > 0.f) || !std::isfinite(s)) continue;
+    const float mass = weights.empty() ? unit_mass : unit_mass * weights[i];
     // Separable Gaussian: the 3D cell integral is the product of three 1D cell integrals.
-    axisWeights(p.z(), s, oz, resolution_z_, nz_, wz);
+    axisWeights(p.z(), sigmas_z[i], oz, resolution_z_, nz_, wz);
     if (wz.w.empty()) continue;
-    axisWeights(p.y(), s, oy, resolution_, ny_, wy);
+    axisWeights(p.y(), sigmas_xy[i], oy, resolution_, ny_, wy);
     if (wy.w.empty()) continue;
-    axisWeights(p.x(), s, ox, resolution_, nx_, wx);
+    axisWeights(p.x(), sigmas_xy[i], ox, resolution_, nx_, wx);
     if (wx.w.empty()) continue;
     for (std::size_t kz = 0; kz < wz.w.size(); ++kz) {
       const float fz = mass * wz.w[kz];
@@ -183,6 +206,92 @@ void SurfaceDensity::computeFromPoints(const std::vector<Eigen::Vector3f>& point
     }
   }
   updateSqrt();
+}
+
+void SurfaceDensity::mergeGaussians(const std::vector<Eigen::Vector3f>& points,
+                                    const std::vector<float>& sigmas, float cell,
+                                    std::vector<Eigen::Vector3f>& out_points,
+                                    std::vector<float>& out_sigmas_xy,
+                                    std::vector<float>& out_sigmas_z,
+                                    std::vector<float>& out_weights) {
+  if (points.size() != sigmas.size())
+    throw std::invalid_argument("SurfaceDensity::mergeGaussians: points and sigmas differ");
+  out_points.clear();
+  out_sigmas_xy.clear();
+  out_sigmas_z.clear();
+  out_weights.clear();
+  auto valid = [&](std::size_t i) {
+    return points[i].allFinite() && sigmas[i] > 0.f && std::isfinite(sigmas[i]);
+  };
+  if (!(cell > 0.f) || !std::isfinite(cell)) {
+    for (std::size_t i = 0; i < points.size(); ++i)
+      if (valid(i)) {
+        out_points.push_back(points[i]);
+        out_sigmas_xy.push_back(sigmas[i]);
+        out_sigmas_z.push_back(sigmas[i]);
+        out_weights.push_back(1.f);
+      }
+    return;
+  }
+  // Sums per cube, in coordinates relative to the cube's corner (no cancellation in the
+  // variances); an open-addressing table on the cube index, reused between calls.
+  struct Acc {
+    std::int64_t key;
+    Eigen::Vector3f corner;
+    Eigen::Vector3f sum, sum_sq;
+    float sigma_sq = 0.f;
+    int n = 0;
+  };
+  thread_local std::vector<int> table;
+  thread_local std::vector<Acc> acc;
+  std::size_t slots = 16;
+  while (slots < 2 * points.size()) slots *= 2;
+  table.assign(slots, -1);
+  acc.clear();
+  const float inv = 1.f / cell;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (!valid(i)) continue;
+    const Eigen::Vector3f q = points[i] * inv;
+    const Eigen::Vector3f f(std::floor(q.x()), std::floor(q.y()), std::floor(q.z()));
+    // Cube indices beyond ±2^20 (points > 100 km away at 0.1 m cubes) are kept unmerged.
+    if (!(f.cwiseAbs().maxCoeff() < 1048576.f)) {
+      acc.push_back({-1 - static_cast<std::int64_t>(acc.size()), points[i], Eigen::Vector3f::Zero(),
+                     Eigen::Vector3f::Zero(), sigmas[i] * sigmas[i], 1});
+      continue;
+    }
+    const std::int64_t key = ((static_cast<std::int64_t>(f.x()) + 1048576) << 42) |
+                             ((static_cast<std::int64_t>(f.y()) + 1048576) << 21) |
+                             (static_cast<std::int64_t>(f.z()) + 1048576);
+    std::size_t h =
+        static_cast<std::size_t>((static_cast<std::uint64_t>(key) * 0x9E3779B97F4A7C15ull) >> 20) &
+        (slots - 1);
+    while (table[h] >= 0 && acc[static_cast<std::size_t>(table[h])].key != key)
+      h = (h + 1) & (slots - 1);
+    if (table[h] < 0) {
+      table[h] = static_cast<int>(acc.size());
+      acc.push_back({key, f * cell, Eigen::Vector3f::Zero(), Eigen::Vector3f::Zero(), 0.f, 0});
+    }
+    Acc& a = acc[static_cast<std::size_t>(table[h])];
+    const Eigen::Vector3f d = points[i] - a.corner;
+    a.sum += d;
+    a.sum_sq += d.cwiseProduct(d);
+    a.sigma_sq += sigmas[i] * sigmas[i];
+    ++a.n;
+  }
+  out_points.reserve(acc.size());
+  out_sigmas_xy.reserve(acc.size());
+  out_sigmas_z.reserve(acc.size());
+  out_weights.reserve(acc.size());
+  for (const Acc& a : acc) {
+    const float n = static_cast<float>(a.n);
+    const Eigen::Vector3f mean = a.sum / n;
+    const Eigen::Vector3f var = (a.sum_sq / n - mean.cwiseProduct(mean)).cwiseMax(0.f);
+    const float s2 = a.sigma_sq / n;
+    out_points.push_back(a.corner + mean);
+    out_sigmas_xy.push_back(std::sqrt(s2 + 0.5f * (var.x() + var.y())));
+    out_sigmas_z.push_back(std::sqrt(s2 + var.z()));
+    out_weights.push_back(n);
+  }
 }
 
 float SurfaceDensity::halfLifeWeight(float half_life_frames) {
@@ -222,8 +331,10 @@ SurfaceDensity SurfaceDensity::shifted(const Eigen::Vector3f& offset) const {
   const float sx = offset.x() / resolution_, sy = offset.y() / resolution_,
               sz = offset.z() / resolution_z_;
   // A shift of more than the grid moves everything out (and would overflow the casts below).
-  if (!(std::abs(sx) < nx_ + 1.f && std::abs(sy) < ny_ + 1.f && std::abs(sz) < nz_ + 1.f))
+  if (!(std::abs(sx) < nx_ + 1.f && std::abs(sy) < ny_ + 1.f && std::abs(sz) < nz_ + 1.f)) {
+    out.updateSqrt();  // square roots, mass and revision of the now empty grid
     return out;
+  }
   const int bx = static_cast<int>(std::floor(sx)), by = static_cast<int>(std::floor(sy)),
             bz = static_cast<int>(std::floor(sz));
   const float fx = sx - bx, fy = sy - by, fz = sz - bz;
@@ -249,12 +360,6 @@ SurfaceDensity SurfaceDensity::shifted(const Eigen::Vector3f& offset) const {
       }
   out.updateSqrt();
   return out;
-}
-
-float SurfaceDensity::totalMass() const {
-  double s = 0.0;
-  for (float v : data_) s += v;
-  return static_cast<float>(s);
 }
 
 float SurfaceDensity::bhattacharyya(const SurfaceDensity& a, const SurfaceDensity& b) {

@@ -673,3 +673,66 @@ TEST(BhattacharyaRegistration, OccludersImproveOccludedSimulatedPairs) {
   EXPECT_GT(ok_with, ok_without);
   EXPECT_LT(sum_with, sum_without);
 }
+
+TEST(BhattacharyaRegistration, ObjectsCreatedInTurnGiveTheResultsOfOneReusedObject) {
+  // Each destroyed object hands its workspace (buffers, FFT plans, target caches) to the next
+  // one on the thread: a new object must not see the previous one's target, even when the
+  // target cloud is the same object with new content.
+  const Eigen::Vector3f sensor(0.f, 0.f, 1.73f);
+  auto target = pcl::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
+  std::vector<Eigen::Matrix4f> fresh, reused;
+  BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ> kept;
+  kept.setYawSamples(5);
+  for (int i = 0; i < 3; ++i) {
+    *target = *vehicle(18.f + 1.5f * i, 2.f - i, 0.2f * i, sensor, 0.f, 1 + i);
+    auto source = vehicle(18.7f + 1.5f * i, 2.3f - i, 0.2f * i, sensor, 0.3f, 7 + i);
+    pcl::PointCloud<pcl::PointXYZ> out;
+    {
+      BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ> reg;
+      reg.setYawSamples(5);
+      reg.setInputSource(source);
+      reg.setInputTarget(target);
+      reg.align(out);
+      ASSERT_TRUE(reg.hasConverged());
+      fresh.push_back(reg.getFinalTransformation());
+    }
+    kept.setInputSource(source);
+    kept.setInputTarget(target);
+    kept.align(out);
+    reused.push_back(kept.getFinalTransformation());
+    EXPECT_LT((fresh.back().block<2, 1>(0, 3) - Eigen::Vector2f(-0.7f, -0.3f)).norm(), 0.1f);
+    EXPECT_TRUE(fresh.back().isApprox(reused.back(), 1e-5f)) << "pair " << i;
+  }
+}
+
+TEST(BhattacharyaRegistration, MergedPointsGiveThePeakAndBOfTheUnmergedOnes) {
+  // Near vehicles (many points per σ, where merging merges most) and a far one, 5 yaw layers.
+  const Eigen::Vector3f sensor(0.f, 0.f, 1.73f);
+  const std::vector<Eigen::Vector3f> cases = {
+      {9.f, 2.f, 0.3f}, {14.f, -5.f, -0.6f}, {35.f, 8.f, 1.1f}};
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    const Eigen::Vector3f c = cases[i];
+    auto target = vehicle(c.x(), c.y(), c.z(), sensor, 0.f, 1 + i);
+    auto source = vehicle(c.x() + 0.63f, c.y() - 0.41f, c.z() + 4.f * kDeg,
+                          sensor + Eigen::Vector3f(0.5f, 0.f, 0.f), 0.4f, 11 + i);
+    Eigen::Matrix4f t[2];
+    float b[2];
+    for (int merged = 0; merged < 2; ++merged) {
+      BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ> reg;
+      reg.setYawSamples(5);
+      reg.setMergeFraction(merged ? 1.f : 0.f);
+      reg.setInputSource(source);
+      reg.setInputTarget(target);
+      pcl::PointCloud<pcl::PointXYZ> out;
+      reg.align(out);
+      ASSERT_TRUE(reg.hasConverged()) << "case " << i << " merged " << merged;
+      t[merged] = reg.getFinalTransformation();
+      b[merged] = reg.getSimilarity();
+    }
+    EXPECT_NEAR(b[1], b[0], 0.005f) << "case " << i;
+    EXPECT_LT((t[1].block<3, 1>(0, 3) - t[0].block<3, 1>(0, 3)).norm(), 0.02f) << "case " << i;
+    EXPECT_LT(std::abs(std::atan2(t[1](1, 0), t[1](0, 0)) - std::atan2(t[0](1, 0), t[0](0, 0))),
+              0.5f * kDeg)
+        << "case " << i;
+  }
+}

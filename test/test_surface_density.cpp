@@ -213,3 +213,102 @@ TEST(SurfaceDensity, FarPointsAndHugeShiftsLeaveNoMassWithoutOverflow) {
   EXPECT_TRUE(nan_shift.empty());
   EXPECT_NEAR(d.shifted(Eigen::Vector3f(0.2f, 0.f, 0.f)).totalMass(), 0.5f, 1e-3f);
 }
+
+TEST(SurfaceDensity, MergedGaussiansKeepMassMomentsAndTheDensity) {
+  // 2000 points on a box 8 m away, σ = 0.1 m (min σ): several points per σ-cube.
+  const Eigen::Vector3f centre(8.f, 1.f, 1.f);
+  const auto cloud = boxSurface(centre, 3, 2000);
+  std::vector<Eigen::Vector3f> pts;
+  std::vector<float> sig;
+  for (const auto& p : cloud) {
+    pts.emplace_back(p.x, p.y, p.z);
+    sig.push_back(0.1f);
+  }
+  pts.emplace_back(std::numeric_limits<float>::quiet_NaN(), 0.f, 0.f);  // dropped
+  sig.push_back(0.1f);
+  std::vector<Eigen::Vector3f> mp;
+  std::vector<float> sxy, sz, w;
+  SurfaceDensity::mergeGaussians(pts, sig, 0.1f, mp, sxy, sz, w);
+  ASSERT_EQ(mp.size(), sxy.size());
+  ASSERT_EQ(mp.size(), w.size());
+  EXPECT_LT(mp.size(), pts.size() / 2);  // it does merge (~20 points per m² of a face)
+  // Total weight, mean and second moments (per axis, σ² included) are those of the points.
+  double n = 0;
+  Eigen::Vector3d mean_m = Eigen::Vector3d::Zero(), mean_p = Eigen::Vector3d::Zero();
+  for (std::size_t i = 0; i < mp.size(); ++i) {
+    n += w[i];
+    mean_m += w[i] * mp[i].cast<double>();
+  }
+  for (std::size_t i = 0; i + 1 < pts.size(); ++i) mean_p += pts[i].cast<double>();
+  EXPECT_DOUBLE_EQ(n, 2000.0);
+  mean_m /= n;
+  mean_p /= 2000.0;
+  EXPECT_LT((mean_m - mean_p).norm(), 1e-4);
+  Eigen::Vector3d m2_m = Eigen::Vector3d::Zero(), m2_p = Eigen::Vector3d::Zero();
+  for (std::size_t i = 0; i < mp.size(); ++i) {
+    const Eigen::Vector3d d = mp[i].cast<double>() - mean_p;
+    m2_m += w[i] * Eigen::Vector3d(d.x() * d.x() + sxy[i] * sxy[i], d.y() * d.y() + sxy[i] * sxy[i],
+                                   d.z() * d.z() + sz[i] * sz[i]);
+  }
+  for (std::size_t i = 0; i + 1 < pts.size(); ++i) {
+    const Eigen::Vector3d d = pts[i].cast<double>() - mean_p;
+    m2_p += d.cwiseProduct(d) + Eigen::Vector3d::Constant(0.01);
+  }
+  // x/y: the merged σ_xy is isotropic, so only the sum over x and y is kept exactly.
+  EXPECT_NEAR((m2_m.x() + m2_m.y()) / n, (m2_p.x() + m2_p.y()) / 2000.0, 1e-3);
+  EXPECT_NEAR(m2_m.z() / n, m2_p.z() / 2000.0, 1e-3);
+
+  // The densities on the registration's grid (0.2 m cells) are nearly identical.
+  SurfaceDensity exact(29, 29, 3, 0.2f, 0.93f), merged(29, 29, 3, 0.2f, 0.93f);
+  exact.computeFromPoints(pts, sig, centre);
+  merged.computeFromGaussians(mp, sxy, sz, w, centre);
+  EXPECT_NEAR(merged.totalMass(), exact.totalMass(), 1e-4f);
+  double l1 = 0.0;
+  for (std::size_t i = 0; i < exact.size(); ++i)
+    l1 += std::abs(exact.values()[i] - merged.values()[i]);
+  EXPECT_LT(l1, 0.02);  // ≤ 1 % of the mass moved (L1 of two unit masses is ≤ 2)
+  EXPECT_GT(SurfaceDensity::bhattacharyya(exact, merged), 0.999f);
+
+  // cell ≤ 0: the points as they are (weight 1, σ unchanged), invalid ones dropped.
+  SurfaceDensity::mergeGaussians(pts, sig, 0.f, mp, sxy, sz, w);
+  ASSERT_EQ(mp.size(), 2000u);
+  EXPECT_EQ(mp[5], pts[5]);
+  EXPECT_EQ(w[5], 1.f);
+  EXPECT_EQ(sz[5], 0.1f);
+  SurfaceDensity copy(29, 29, 3, 0.2f, 0.93f);
+  copy.computeFromGaussians(mp, sxy, sz, w, centre);
+  EXPECT_EQ(copy.values(), exact.values());
+}
+
+TEST(SurfaceDensity, MassAndSquareRootsFollowEveryChange) {
+  // totalMass() is kept with the values: check it after each kind of change.
+  const Eigen::Vector3f centre(12.f, -2.f, 1.f);
+  SurfaceDensity d;
+  EXPECT_EQ(d.totalMass(), 0.f);
+  d.compute(boxSurface(centre, 5), Eigen::Vector3f::Zero(), centre);
+  auto sum = [](const SurfaceDensity& s) {
+    double m = 0.0;
+    for (float v : s.values()) m += v;
+    return static_cast<float>(m);
+  };
+  EXPECT_NEAR(d.totalMass(), 1.f, 1e-3f);
+  EXPECT_FLOAT_EQ(d.totalMass(), sum(d));
+  const SurfaceDensity copy = d;
+  EXPECT_FLOAT_EQ(copy.totalMass(), d.totalMass());
+  // Moved out entirely: no mass and no square roots left.
+  const SurfaceDensity gone = d.shifted(Eigen::Vector3f(100.f, 0.f, 0.f));
+  EXPECT_EQ(gone.totalMass(), 0.f);
+  for (float v : gone.sqrtValues()) ASSERT_EQ(v, 0.f);
+  const SurfaceDensity half = d.shifted(Eigen::Vector3f(2.9f, 0.f, 0.f));
+  EXPECT_FLOAT_EQ(half.totalMass(), sum(half));
+  EXPECT_LT(half.totalMass(), 0.9f);
+  std::vector<float> values(d.size(), 0.f);
+  values[7] = 0.25f;
+  d.setValues(values);
+  EXPECT_FLOAT_EQ(d.totalMass(), 0.25f);
+  d.clear();
+  EXPECT_EQ(d.totalMass(), 0.f);
+  EXPECT_TRUE(d.empty());
+  d.setGridSize(5, 5, 5);
+  EXPECT_TRUE(d.empty());
+}

@@ -17,6 +17,12 @@ namespace pcl_movers {
 
 namespace detail {
 struct BhattacharyaWorkspace;
+/** \brief A workspace for a new registration object: the one the last object destroyed on this
+ * thread left behind (its buffers and FFT plans already sized), or a new one. */
+std::shared_ptr<BhattacharyaWorkspace> acquireWorkspace();
+/** \brief Keeps `work` (if no copy of its object still uses it) for the next object created on
+ * this thread: a registration per object pair then costs no heap traffic once warm. */
+void releaseWorkspace(std::shared_ptr<BhattacharyaWorkspace>& work);
 }  // namespace detail
 
 /** \brief The Bhattacharyya similarity B over the searched motions of the last align().
@@ -84,7 +90,7 @@ class BhattacharyaRegistration : public pcl::Registration<PointSource, PointTarg
       pcl::shared_ptr<const BhattacharyaRegistration<PointSource, PointTarget, Scalar>>;
 
   BhattacharyaRegistration();
-  ~BhattacharyaRegistration() override = default;
+  ~BhattacharyaRegistration() override { detail::releaseWorkspace(work_); }
 
   /** \brief Unlike the base class, an empty cloud is accepted; align() then reports
    * hasConverged() == false instead of silently reusing the previous cloud. */
@@ -215,6 +221,14 @@ class BhattacharyaRegistration : public pcl::Registration<PointSource, PointTarg
   }
   PointCloudTargetConstPtr getTargetOccluders() const { return target_occluders_; }
 
+  /** \brief Points (of the source, and of a target cloud) closer together than a cube of
+   * fraction · min σ are merged into one moment-matched Gaussian before the densities are built
+   * (SurfaceDensity::mergeGaussians()): near objects have many points per σ, and every yaw layer
+   * and refinement step rasterises them all. The densities change by O(fraction⁴) relative.
+   * 0 switches merging off. Default 1 (see docs/benchmarks.md). */
+  void setMergeFraction(float fraction) { merge_fraction_ = fraction; }
+  float getMergeFraction() const { return merge_fraction_; }
+
   /** \brief B below this means "no match": hasConverged() is false (default 0.2). */
   void setMinSimilarity(float min_similarity) { min_similarity_ = min_similarity; }
   float getMinSimilarity() const { return min_similarity_; }
@@ -263,6 +277,9 @@ class BhattacharyaRegistration : public pcl::Registration<PointSource, PointTarg
    * target_ (kept between calls while the cloud and the grid parameters stay the same). Null
    * when it is empty or the target has < 2 finite points. */
   const SurfaceDensity* targetDensity();
+  /** \brief `density` ← the Gaussians of `points` merged as set by setMergeFraction(). */
+  void buildDensity(SurfaceDensity& density, const std::vector<Eigen::Vector3f>& points,
+                    const std::vector<float>& sigmas, const Eigen::Vector3f& centre);
 
   float search_radius_ = 2.0f;
   float resolution_ = 0.2f;
@@ -273,6 +290,7 @@ class BhattacharyaRegistration : public pcl::Registration<PointSource, PointTarg
   float sigma_per_metre_ = 0.005f;
   float min_sigma_ = 0.1f;
   float min_similarity_ = 0.2f;
+  float merge_fraction_ = 1.0f;
   bool search_z_ = false;
   bool full_yaw_window_ = false;
   bool compute_source_density_ = true;
@@ -285,7 +303,8 @@ class BhattacharyaRegistration : public pcl::Registration<PointSource, PointTarg
   PointCloudSourceConstPtr source_occluders_;
   PointCloudTargetConstPtr target_occluders_;
   /** Buffers, FFT plans and the target caches reused between align() calls (no heap traffic
-   * per call once warm); shared by copies of this object. */
+   * per call once warm); shared by copies of this object, and handed on to the next object
+   * created on the thread when this one is destroyed (see detail::acquireWorkspace()). */
   std::shared_ptr<detail::BhattacharyaWorkspace> work_;
 
   SurfaceDensity::ConstPtr target_density_;

@@ -92,6 +92,29 @@ class SurfaceDensity {
   void computeFromPoints(const std::vector<Eigen::Vector3f>& points,
                          const std::vector<float>& sigmas, const Eigen::Vector3f& centre);
 
+  /** \brief The general core: Gaussian i at points[i] with σ sigmas_xy[i] in x and y and
+   * sigmas_z[i] in z, carrying mass weights[i] / Σ weights (1/n each when `weights` is empty).
+   * Gaussians with a non-finite coordinate, σ ≤ 0 or weight ≤ 0 are skipped. Takes what
+   * mergeGaussians() produces. */
+  void computeFromGaussians(const std::vector<Eigen::Vector3f>& points,
+                            const std::vector<float>& sigmas_xy, const std::vector<float>& sigmas_z,
+                            const std::vector<float>& weights, const Eigen::Vector3f& centre);
+
+  /** \brief Merges the points of each cube of edge `cell` [m] (a lattice fixed in the frame of
+   * the points) into one Gaussian with the same mass, mean and second moments: weight = number
+   * of points, mean = their mean, σ_z² = mean σ² + variance in z, σ_xy² = mean σ² + mean of the
+   * variances in x and y (isotropic in x/y, so turning about z keeps it exact). The density
+   * changes only by the fourth moments, O((cell/σ)⁴) relative: with cell ≤ σ a near object's
+   * hundreds of points become a fraction as many Gaussians at no visible cost (see
+   * BhattacharyaRegistration::setMergeFraction()). Invalid points (non-finite or σ ≤ 0) are
+   * dropped; the output order is that of each cube's first point (deterministic). cell ≤ 0
+   * copies the points as they are. */
+  static void mergeGaussians(const std::vector<Eigen::Vector3f>& points,
+                             const std::vector<float>& sigmas, float cell,
+                             std::vector<Eigen::Vector3f>& out_points,
+                             std::vector<float>& out_sigmas_xy, std::vector<float>& out_sigmas_z,
+                             std::vector<float>& out_weights);
+
   /** \brief σ the density would use for a point at `range` metres. */
   float sigmaAtRange(float range) const;
 
@@ -127,8 +150,10 @@ class SurfaceDensity {
   /** \brief World position of a cell centre. */
   Eigen::Vector3f cellCentre(int ix, int iy, int iz) const;
 
-  /** \brief Σ ρ over the grid: 1 when every Gaussian lies inside, less when mass fell outside. */
-  float totalMass() const;
+  /** \brief Σ ρ over the grid: 1 when every Gaussian lies inside, less when mass fell outside.
+   * Kept with the values (computed once per change, not per call: registrations ask for it on
+   * every align()). */
+  float totalMass() const { return mass_; }
   /** \brief True when the grid holds no mass. */
   bool empty() const { return totalMass() <= 0.f; }
 
@@ -156,6 +181,7 @@ class SurfaceDensity {
   std::vector<float> data_;
   std::vector<float> sqrt_;
   std::uint64_t revision_ = 0;
+  float mass_ = 0.f;
 };
 
 }  // namespace pcl_movers

@@ -59,6 +59,12 @@ class ShadowImage {
 struct BhattacharyaWorkspace {
   std::vector<Eigen::Vector3f> points, turned;
   std::vector<float> sigmas;
+  // The source's Gaussians after merging (setMergeFraction()): what the layers are built from.
+  std::vector<Eigen::Vector3f> gauss_points;
+  std::vector<float> gauss_sigmas_xy, gauss_sigmas_z, gauss_weights;
+  // Same for a target cloud's density.
+  std::vector<Eigen::Vector3f> target_points, target_gauss_points;
+  std::vector<float> target_sigmas, target_sigmas_xy, target_sigmas_z, target_weights;
   std::vector<SourceLayer> layers;
   SourceLayer refine[3];
   std::vector<float> scores, block, local;
@@ -82,6 +88,12 @@ struct BhattacharyaWorkspace {
  * `target`, clipped to the cells that can overlap the target for shifts of ±nr (±nrz) cells. */
 void buildSourceLayer(SourceLayer& layer, const std::vector<Eigen::Vector3f>& points,
                       const std::vector<float>& sigmas, const SurfaceDensity& target, int nr,
+                      int nrz);
+/** \brief Same for Gaussians with σ per axis group and weights (SurfaceDensity::mergeGaussians()
+ * output; empty `weights`: equal masses). */
+void buildSourceLayer(SourceLayer& layer, const std::vector<Eigen::Vector3f>& points,
+                      const std::vector<float>& sigmas_xy, const std::vector<float>& sigmas_z,
+                      const std::vector<float>& weights, const SurfaceDensity& target, int nr,
                       int nrz);
 
 /** \brief B(d) = Σ_j sqrt(S[j])·sqrt(T[j + o + d]) for d in [dx0,dx1]×[dy0,dy1]×[dz0,dz1],
@@ -108,7 +120,7 @@ BhattacharyaRegistration<PointSource, PointTarget, Scalar>::BhattacharyaRegistra
   // No kd-tree is ever needed: stop pcl::Registration::initCompute() from building one.
   this->force_no_recompute_ = true;
   this->force_no_recompute_reciprocal_ = true;
-  work_ = std::make_shared<detail::BhattacharyaWorkspace>();
+  work_ = detail::acquireWorkspace();
 }
 
 template <typename PointSource, typename PointTarget, typename Scalar>
@@ -217,7 +229,15 @@ const SurfaceDensity* BhattacharyaRegistration<PointSource, PointTarget, Scalar>
   target.setResolutionZ(grid_height_ / static_cast<float>(nz_));
   target.setSigmaPerMetre(sigma_per_metre_);
   target.setMinSigma(min_sigma_);
-  target.compute(*target_, origin, Eigen::Vector3f(0.5f * (lo + hi)));
+  w.target_points.clear();
+  w.target_sigmas.clear();
+  for (const auto& p : target_->points) {
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
+    const Eigen::Vector3f v(p.x, p.y, p.z);
+    w.target_points.push_back(v);
+    w.target_sigmas.push_back(target.sigmaAtRange((v - origin).norm()));
+  }
+  buildDensity(target, w.target_points, w.target_sigmas, Eigen::Vector3f(0.5f * (lo + hi)));
   return target.empty() ? nullptr : &target;
 }
 
@@ -308,7 +328,7 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::occlusionPass()
       t.setResolutionZ(grid_height_ / static_cast<float>(nz_));
       t.setSigmaPerMetre(sigma_per_metre_);
       t.setMinSigma(min_sigma_);
-      t.computeFromPoints(pts, sig, Eigen::Vector3f(0.5f * (lo + hi)));
+      buildDensity(t, pts, sig, Eigen::Vector3f(0.5f * (lo + hi)));
       if (t.empty()) return;
       target_override = &t;
     }
@@ -328,6 +348,18 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::occlusionPass()
     source_density_ = first_density;
     converged_ = true;
   }
+}
+
+template <typename PointSource, typename PointTarget, typename Scalar>
+void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::buildDensity(
+    SurfaceDensity& density, const std::vector<Eigen::Vector3f>& points,
+    const std::vector<float>& sigmas, const Eigen::Vector3f& centre) {
+  detail::BhattacharyaWorkspace& w = *work_;
+  SurfaceDensity::mergeGaussians(points, sigmas, merge_fraction_ * min_sigma_,
+                                 w.target_gauss_points, w.target_sigmas_xy, w.target_sigmas_z,
+                                 w.target_weights);
+  density.computeFromGaussians(w.target_gauss_points, w.target_sigmas_xy, w.target_sigmas_z,
+                               w.target_weights, centre);
 }
 
 template <typename PointSource, typename PointTarget, typename Scalar>
@@ -396,8 +428,18 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::search(
   Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
   for (const auto& p : points) centroid += p;
   centroid /= static_cast<float>(points.size());
+  // The Gaussians every source density below is built from: the points merged per cube of
+  // merge fraction · min σ (moment-matched, see SurfaceDensity::mergeGaussians()), once per
+  // search instead of once per yaw layer and refinement step.
+  std::vector<Eigen::Vector3f>& gauss = w.gauss_points;
+  SurfaceDensity::mergeGaussians(points, sigmas, merge_fraction_ * min_sigma_, gauss,
+                                 w.gauss_sigmas_xy, w.gauss_sigmas_z, w.gauss_weights);
   std::vector<Eigen::Vector3f>& turned = w.turned;
-  turned.resize(points.size());
+  turned.resize(gauss.size());
+  auto buildLayer = [&](detail::SourceLayer& layer, int r, int rz) {
+    detail::buildSourceLayer(layer, turned, w.gauss_sigmas_xy, w.gauss_sigmas_z, w.gauss_weights,
+                             target, r, rz);
+  };
 
   // ---- search window: translations d of ±nr cells (±nrz in z) around the guess
   const int nr = std::max(1, static_cast<int>(std::ceil(radius / res - 1e-4f)));
@@ -411,13 +453,12 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::search(
   // Moves the source (after the guess) by yaw ψ about its centroid, then by `shift`.
   auto place = [&](float yaw, const Eigen::Vector3f& shift) {
     const Eigen::Matrix3f rz = Eigen::AngleAxisf(yaw, Eigen::Vector3f::UnitZ()).toRotationMatrix();
-    for (std::size_t i = 0; i < points.size(); ++i)
-      turned[i] = rz * (points[i] - centroid) + centroid + shift;
+    for (std::size_t i = 0; i < gauss.size(); ++i)
+      turned[i] = rz * (gauss[i] - centroid) + centroid + shift;
   };
   for (int l = 0; l < layers; ++l) {
     place(static_cast<float>(l - mid) * yaw_step_, Eigen::Vector3f::Zero());
-    detail::buildSourceLayer(w.layers[static_cast<std::size_t>(l)], turned, sigmas, target, nr,
-                             nrz);
+    buildLayer(w.layers[static_cast<std::size_t>(l)], nr, nrz);
   }
 
   // scores[((l·wz + dz+nrz)·wx + dy+nr)·wx + dx+nr] = B(d) of layer l; -1: not evaluated.
@@ -547,7 +588,7 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::search(
     for (int k = 0; k < rl; ++k) {
       place(yaw + static_cast<float>(k - (rl - 1) / 2) * yaw_step_,
             Eigen::Vector3f(dx * res, dy * res, dz * res_z));
-      detail::buildSourceLayer(w.refine[k], turned, sigmas, target, 1, rz);
+      buildLayer(w.refine[k], 1, rz);
       detail::correlateDirect(target, w.refine[k], -1, 1, -1, 1, -rz, rz,
                               &w.local[static_cast<std::size_t>(k) * (2 * rz + 1) * 9]);
     }
@@ -593,7 +634,7 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::search(
   if (compute_source_density_) {
     const Eigen::Matrix3f r = motion.linear();
     const Eigen::Vector3f t = motion.translation();
-    for (std::size_t i = 0; i < points.size(); ++i) turned[i] = r * points[i] + t;
+    for (std::size_t i = 0; i < gauss.size(); ++i) turned[i] = r * gauss[i] + t;
     if (!source_density_ || source_density_.use_count() > 1)
       source_density_ = pcl::make_shared<SurfaceDensity>(target);
     SurfaceDensity& sd = *source_density_;
@@ -604,7 +645,8 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::search(
     sd.setResolutionZ(res_z);
     sd.setSigmaPerMetre(target.getSigmaPerMetre());
     sd.setMinSigma(target.getMinSigma());
-    sd.computeFromPoints(turned, sigmas, target.getCentre());
+    sd.computeFromGaussians(turned, w.gauss_sigmas_xy, w.gauss_sigmas_z, w.gauss_weights,
+                            target.getCentre());
     keep_source_density = true;
   }
   finish();
