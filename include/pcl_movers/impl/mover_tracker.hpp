@@ -517,6 +517,43 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     t.large = cand.features.large;
     t.history.emplace_back(m.measurement.x(), m.measurement.y(), time);
     while (static_cast<int>(t.history.size()) > p.mover_window + 1) t.history.pop_front();
+    if (p.velocity_fit_init && registered && t.hits == 3) {
+      // A young track's Kalman velocity converges slowly: its birth position carries
+      // registration_sigma while later positions carry the range-scaled σ, so the filter stays
+      // anchored on the birth position (a car at 80 m took 10+ frames). At the third
+      // registration the filter restarts from the least-squares line through the three
+      // positions, with that line's covariance (σ as in the updates, or the scatter if larger).
+      Eigen::Vector2d v;
+      double sigma_v = 0;
+      if (fitVelocity(t.history, meas_sigma, v, sigma_v)) {
+        double t_mean = 0;
+        for (const auto& h : t.history) t_mean += h.z();
+        t_mean /= static_cast<double>(t.history.size());
+        double stt = 0;
+        Eigen::Vector2d x_mean = Eigen::Vector2d::Zero();
+        for (const auto& h : t.history) {
+          stt += (h.z() - t_mean) * (h.z() - t_mean);
+          x_mean += h.template head<2>();
+        }
+        x_mean /= static_cast<double>(t.history.size());
+        const double s2 = sigma_v * sigma_v * stt;  // σ² of one position
+        const double dt_now = time - t_mean;
+        KalmanFilterCV::State state;
+        state.template head<2>() = x_mean + v * dt_now;
+        state.template tail<2>() = v;
+        KalmanFilterCV::Covariance cov = KalmanFilterCV::Covariance::Zero();
+        const double var_p =
+            s2 * (1.0 / static_cast<double>(t.history.size()) + dt_now * dt_now / stt);
+        const double var_v = s2 / stt, cov_pv = s2 * dt_now / stt;
+        for (int a = 0; a < 2; ++a) {
+          cov(a, a) = var_p;
+          cov(a + 2, a + 2) = var_v;
+          cov(a, a + 2) = cov(a + 2, a) = cov_pv;
+        }
+        t.filter.setState(state);
+        t.filter.setCovariance(cov);
+      }
+    }
     if (p.fast_from_fit) {
       // Fast only when a straight line fits the measured positions of the window with a speed
       // above the threshold and well above its uncertainty, the uncertainty taken from the
