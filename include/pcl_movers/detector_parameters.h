@@ -127,9 +127,10 @@ struct DetectorParameters {
   double mover_speed = 1.2;
   /// A speed only counts as fast when it is also this many standard deviations above zero.
   double mover_speed_sigmas = 2.0;
-  /// 1 = a speed vote uses the least-squares line through the measured positions of the window
-  /// (σ from their scatter about it, at least registration_sigma / centroid_sigma); 0 = the
-  /// Kalman velocity and its covariance (σ from measurement_sigma_per_metre · range).
+  /// 1 = the speed vote of a registered update uses the least-squares line through the measured
+  /// positions of the window (σ from their scatter about it, at least registration_sigma); 0 =
+  /// the Kalman velocity and its covariance (σ from measurement_sigma_per_metre · range), which
+  /// centroid updates always use.
   int fast_from_fit = 1;
   /// 1 = at a track's third registered update its Kalman filter restarts from the least-squares
   /// line through its three positions (see MoverTracker); 0 = the filter runs on from birth.

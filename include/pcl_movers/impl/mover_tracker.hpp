@@ -554,15 +554,17 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
         t.filter.setCovariance(cov);
       }
     }
-    if (p.fast_from_fit) {
+    if (p.fast_from_fit && registered) {
       // Fast only when a straight line fits the measured positions of the window with a speed
       // above the threshold and well above its uncertainty, the uncertainty taken from the
       // scatter of the positions about that line (at least the measurement σ). The Kalman
       // velocity's σ rests on an assumed σ = measurement_sigma_per_metre·range: a pedestrian at
       // 40 m registered to a few cm (urban) never cleared it (σ_v ≈ 0.65 m/s at 1.3 m/s) and was
       // confirmed 20 frames late. The scatter credits precise registrations and still withholds
-      // the vote from noisy ones.
-      const double floor = t.large || !registered ? p.centroid_sigma : p.registration_sigma;
+      // the vote from noisy ones. Centroid measurements (centroid mode, large structures) keep the
+      // Kalman test: with their 0.3 m σ floor a 6-position line cannot tell a walker (σ_v 0.7
+      // m/s), where the filter's longer memory can (centroid-mode walkers were lost).
+      const double floor = p.registration_sigma;
       Eigen::Vector2d v;
       double sigma_v = 0;
       const bool fitted = fitVelocity(t.history, floor, v, sigma_v);
