@@ -127,6 +127,14 @@ struct DetectorParameters {
   double mover_speed = 1.2;
   /// A speed only counts as fast when it is also this many standard deviations above zero.
   double mover_speed_sigmas = 2.0;
+  /// 1 = the speed vote of a registered update uses the least-squares line through the measured
+  /// positions of the window (σ from their scatter about it, at least registration_sigma); 0 =
+  /// the Kalman velocity and its covariance (σ from measurement_sigma_per_metre · range), which
+  /// centroid updates always use.
+  int fast_from_fit = 1;
+  /// 1 = at a track's third registered update its Kalman filter restarts from the least-squares
+  /// line through its three positions (see MoverTracker); 0 = the filter runs on from birth.
+  int velocity_fit_init = 1;
   /// A track is a mover when its speed exceeded mover_speed in mover_votes of its last
   /// mover_window updates, it has at least mover_min_age updates, and the displacement of its
   /// measurements over the window is consistent with that speed.
@@ -229,6 +237,10 @@ void DetectorParameters::forEachParameter(F&& f) {
   f("min_mover_height", min_mover_height, "lower clusters are never movers [m]");
   f("mover_speed", mover_speed, "speed threshold of a mover [m/s]");
   f("mover_speed_sigmas", mover_speed_sigmas, "fast only if speed > this * its sigma");
+  f("fast_from_fit", fast_from_fit,
+    "1 = speed votes from a line fit of the measured positions, 0 = Kalman velocity");
+  f("velocity_fit_init", velocity_fit_init,
+    "1 = restart the Kalman filter from a line fit at the 3rd registered update");
   f("mover_window", mover_window, "mover decision window N [updates]");
   f("mover_votes", mover_votes, "fast updates M of the last N needed");
   f("mover_min_age", mover_min_age, "min updates of a mover track K");
@@ -370,6 +382,10 @@ inline void DetectorParameters::validate() const {
     throw InputError("parameter hold_confirmed must be 0 or 1");
   if (ground_local_slope != 0 && ground_local_slope != 1)
     throw InputError("parameter ground_local_slope must be 0 or 1");
+  if (velocity_fit_init != 0 && velocity_fit_init != 1)
+    throw InputError("parameter velocity_fit_init must be 0 or 1");
+  if (fast_from_fit != 0 && fast_from_fit != 1)
+    throw InputError("parameter fast_from_fit must be 0 or 1");
   if (mover_latch != 0 && mover_latch != 1)
     throw InputError("parameter mover_latch must be 0 or 1");
   if (max_missed_frames < 0) throw InputError("parameter max_missed_frames must be >= 0");

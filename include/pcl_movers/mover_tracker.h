@@ -166,6 +166,12 @@ class MoverTracker {
   /** \brief Total number of tracks ever started. */
   int getTracksStarted() const { return next_id_; }
 
+  /** \brief Least-squares line through measured positions (x, y, time): its velocity and the
+   * velocity's σ (per axis) from the scatter of the positions about the line, at least
+   * `min_sigma`. False (σ infinite) with fewer than 3 positions or no time span. */
+  static bool fitVelocity(const std::deque<Eigen::Vector3d>& history, double min_sigma,
+                          Eigen::Vector2d& velocity, double& sigma_v);
+
   /** \brief Forgets all tracks. */
   void reset();
 
