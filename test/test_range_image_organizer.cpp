@@ -336,17 +336,11 @@ TEST(RangeImageOrganizer, WorksForPointXYZ) {
   EXPECT_EQ(organizer.getCellOfPoint()[0], 3 * model.columns() + model.columnOf(0.f));
 }
 
-TEST(RangeImageOrganizer, VectorizedKernelMatchesTheScalarReference) {
-  // The SIMD kernel (SSE2, or AVX2 when the CPU has it) must give bit-identical results to the
-  // scalar loop, including NaN/Inf, the origin, far points and the padding lanes.
+// The lookup layout both kernel tests use: a 560 x 32 row table over the elevation band of an
+// HDL-64E, 2200 columns over a full turn, points up to 80 m. Each test sets its own row limits.
+pcl_movers::detail::OrganizerKernelParams kernelTableParams() {
   pcl_movers::detail::OrganizerKernelParams c;
   c.max_range2 = 80.f * 80.f;
-  c.min_range2 = 0.5f * 0.5f;
-  c.upper_limit = 0.04f;
-  c.upper_offset = 0.21f;
-  c.lower_limit = -0.47f;
-  c.lower_offset = 0.12f;
-  c.mean_offset = 0.16f;
   c.g_min = -0.6f;
   c.g_scale = 800.f;
   c.g_bins = 560.f;
@@ -355,6 +349,19 @@ TEST(RangeImageOrganizer, VectorizedKernelMatchesTheScalarReference) {
   c.azimuth_max = float(M_PI);
   c.columns_per_radian = 2200.f / float(2 * M_PI);
   c.columns = 2200.f;
+  return c;
+}
+
+TEST(RangeImageOrganizer, VectorizedKernelMatchesTheScalarReference) {
+  // The SIMD kernel (SSE2, or AVX2 when the CPU has it) must give bit-identical results to the
+  // scalar loop, including NaN/Inf, the origin, far points and the padding lanes.
+  pcl_movers::detail::OrganizerKernelParams c = kernelTableParams();
+  c.min_range2 = 0.5f * 0.5f;
+  c.upper_limit = 0.04f;
+  c.upper_offset = 0.21f;
+  c.lower_limit = -0.47f;
+  c.lower_offset = 0.12f;
+  c.mean_offset = 0.16f;
   std::mt19937 rng(11);
   // A random row table (with ambiguous cells) and mid-lines: only the lookup is compared here.
   std::vector<std::uint16_t> table(560 * 32 + 1);
@@ -424,22 +431,13 @@ TEST(RangeImageOrganizer, EveryKernelVariantMatchesTheScalarReference) {
   // shortcut that confirms the previous row) and on shuffled ones, with a row table consistent
   // with its mid-lines as prepareLookup builds it: horizontal mid-lines 0.0075 apart, table
   // cells of 0.00125, a cell holding a mid-line within 1e-4 (a float rounding away) ambiguous.
-  pcl_movers::detail::OrganizerKernelParams c;
-  c.max_range2 = 80.f * 80.f;
+  pcl_movers::detail::OrganizerKernelParams c = kernelTableParams();
   c.min_range2 = 0.f;
   c.upper_limit = 0.035f;
   c.upper_offset = 0.f;
   c.lower_limit = 0.03f - 0.0075f * 63.f - 0.004f;
   c.lower_offset = 0.f;
   c.mean_offset = 0.f;
-  c.g_min = -0.6f;
-  c.g_scale = 800.f;
-  c.g_bins = 560.f;
-  c.w_scale = 32.f;
-  c.w_bins = 32.f;
-  c.azimuth_max = float(M_PI);
-  c.columns_per_radian = 2200.f / float(2 * M_PI);
-  c.columns = 2200.f;
   c.full_revolution = true;
   c.ordered_mid_lines = true;
   std::vector<float> mid_a(64, -std::numeric_limits<float>::infinity()), mid_h(64, 0.f);
