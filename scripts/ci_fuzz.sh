@@ -12,13 +12,18 @@
 # With JOBS >= 2 the targets run at the same time: each libFuzzer process is single-threaded, so
 # two of them on two cores take SECONDS in all instead of 2 x SECONDS, with the same inputs per
 # second each as run one after the other on an otherwise idle machine.
+# FUZZ_SEED (environment): libFuzzer's -seed. Unset or 0, libFuzzer draws one (exploration: run
+# it long and often before a release). CI sets a fixed seed so a commit's fuzz result can be
+# replayed exactly: the same seed runs the same input sequence, a faster machine just gets
+# further along it (`FUZZ_SEED=N scripts/ci_fuzz.sh build-fuzz 300` covers what CI reaches in 60 s).
 # Needs: clang, libclang-rt-14-dev (Debian bookworm) or the matching compiler-rt for your clang.
-# Usage: scripts/ci_fuzz.sh [BUILD_DIR] [SECONDS] [JOBS]
+# Usage: [FUZZ_SEED=N] scripts/ci_fuzz.sh [BUILD_DIR] [SECONDS] [JOBS]
 set -euo pipefail
 ROOT="$(cd "$(dirname "$0")/.." && pwd)"
 BUILD="${1:-$ROOT/build-fuzz}"
 SECONDS_PER_TARGET="${2:-60}"
 JOBS="${3:-2}"
+SEED="${FUZZ_SEED:-0}"
 TARGETS=(fuzz_pcd_pipeline:corpus_pcd fuzz_scenario:corpus_scenario)
 
 if ! grep -qs "^PCL_MOVERS_BUILD_FUZZERS:BOOL=ON" "$BUILD/CMakeCache.txt"; then
@@ -52,7 +57,7 @@ run_target() {  # target seeds: runs one fuzzer, output in $BUILD/<target>.log
   local work="$BUILD/fuzz-corpus/$target"
   mkdir -p "$work"
   "$BUILD/test/fuzz/$target" "$work" "$seeds" -max_total_time="$SECONDS_PER_TARGET" \
-    -timeout=30 -rss_limit_mb=2048 -max_len=65536 -print_final_stats=1 \
+    -seed="$SEED" -timeout=30 -rss_limit_mb=2048 -max_len=65536 -print_final_stats=1 \
     -artifact_prefix="$ARTIFACTS/$target-" >"$BUILD/$target.log" 2>&1
 }
 
@@ -70,7 +75,7 @@ report() {  # target rc
 
 status=0
 if [ "$JOBS" -ge 2 ]; then
-  echo "== ${TARGETS[*]%%:*}: ${SECONDS_PER_TARGET} s, side by side"
+  echo "== ${TARGETS[*]%%:*}: ${SECONDS_PER_TARGET} s, side by side, seed ${SEED} (0: random)"
   pids=()
   for pair in "${TARGETS[@]}"; do
     run_target "${pair%%:*}" "$ROOT/test/fuzz/${pair##*:}" &

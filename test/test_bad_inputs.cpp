@@ -26,6 +26,8 @@
 #include <pcl_movers/sim/lidar_simulator.h>
 #include <pcl_movers/sim/scenario.h>
 
+#include <pcl/io/pcd_io.h>
+
 #include <gtest/gtest.h>
 
 #include <sys/wait.h>
@@ -35,6 +37,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -551,6 +554,85 @@ TEST(BadInputsInProcess, ReadScanOfPcdWithCorruptTypeLine) {
     EXPECT_TRUE(cloud.empty());
   } catch (const pcl_movers::InputError& e) {
     EXPECT_NE(std::string(e.what()).find("corrupt.pcd"), std::string::npos) << e.what();
+  }
+  fs::remove_all(tmpl);
+}
+
+// Found by fuzz_pcd_pipeline in the CI sanitizer job
+// (test/fuzz/corpus_pcd/regression_header_claims_terabytes.pcd): pcl::PCDReader::readHeader
+// allocates POINTS × point_step bytes before it reads any data, so a 190-byte file claiming
+// 371 million points of 4 kB asked for 1.5 TB (ASan abort; std::bad_alloc escaping, or a real
+// multi-GB allocation for smaller claims, in a plain build). readScan must refuse it up front.
+TEST(BadInputsInProcess, ReadScanRefusesHeaderClaimingMoreDataThanTheFile) {
+  const std::string path = std::string(PCL_MOVERS_SOURCE_DIR) +
+                           "/test/fuzz/corpus_pcd/regression_header_claims_terabytes.pcd";
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  try {
+    pcl_movers::io::readScan(path, cloud);
+    ADD_FAILURE() << "a header claiming 1.5 TB of data in a tiny file was accepted";
+  } catch (const pcl_movers::InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("regression_header_claims_terabytes.pcd:10:"), std::string::npos) << what;
+    EXPECT_NE(what.find("claims 371042315 points"), std::string::npos) << what;
+  }
+}
+
+// The same check, per data format, must not refuse real files: PCL writes ascii, binary and
+// binary_compressed; each reads back whole, and the same file with its POINTS/WIDTH inflated
+// ten-fold is refused (binary: the bytes are not there; ascii: not enough text for the values;
+// compressed: beyond LZF's largest expansion only for a much bigger claim, so ×1000 there).
+TEST(BadInputsInProcess, ReadScanClaimedSizeCheckPerDataFormat) {
+  char tmpl[] = "/tmp/pcl_movers_claimed_size_XXXXXX";
+  ASSERT_NE(mkdtemp(tmpl), nullptr);
+  pcl::PointCloud<pcl::PointXYZI> cloud;
+  for (int k = 0; k < 500; ++k)
+    cloud.push_back(pcl::PointXYZI(0.01f * k, 5.f - 0.02f * k, -1.5f + 0.001f * k, float(k % 7)));
+  auto inflate = [](std::string text, unsigned factor) {
+    for (const char* key : {"WIDTH ", "POINTS "}) {
+      const std::size_t at = text.find(std::string("\n") + key) + 1 + std::strlen(key);
+      const std::size_t end = text.find('\n', at);
+      const unsigned long n = std::stoul(text.substr(at, end - at));
+      text.replace(at, end - at, std::to_string(n * factor));
+    }
+    return text;
+  };
+  struct Format {
+    const char* name;
+    int (*save)(const std::string&, const pcl::PointCloud<pcl::PointXYZI>&);
+    unsigned inflation;
+  };
+  const Format formats[] = {
+      {"ascii",
+       [](const std::string& p, const pcl::PointCloud<pcl::PointXYZI>& c) {
+         return pcl::io::savePCDFileASCII(p, c);
+       },
+       10},
+      {"binary",
+       [](const std::string& p, const pcl::PointCloud<pcl::PointXYZI>& c) {
+         return pcl::io::savePCDFileBinary(p, c);
+       },
+       10},
+      {"binary_compressed",
+       [](const std::string& p, const pcl::PointCloud<pcl::PointXYZI>& c) {
+         return pcl::io::savePCDFileBinaryCompressed(p, c);
+       },
+       1000},
+  };
+  for (const Format& f : formats) {
+    SCOPED_TRACE(f.name);
+    const std::string good = std::string(tmpl) + "/" + f.name + ".pcd";
+    ASSERT_EQ(f.save(good, cloud), 0);
+    pcl::PointCloud<pcl::PointXYZI> back;
+    pcl_movers::io::readScan(good, back);
+    EXPECT_EQ(back.size(), cloud.size());
+    const std::string bad = std::string(tmpl) + "/" + f.name + "_inflated.pcd";
+    writeFile(bad, inflate(readFile(good), f.inflation));
+    try {
+      pcl_movers::io::readScan(bad, back);
+      ADD_FAILURE() << "inflated header accepted";
+    } catch (const pcl_movers::InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("header claims"), std::string::npos) << e.what();
+    }
   }
   fs::remove_all(tmpl);
 }

@@ -55,8 +55,135 @@ bool isIdentityViewpoint(const Eigen::Vector4f& origin, const Eigen::Quaternionf
   return origin.head<3>().norm() < 1e-9f && std::abs(std::abs(q.w()) - 1.0f) < 1e-7f;
 }
 
+/** Refuses a PCD whose header claims more point data than the file can hold.
+ *
+ * pcl::PCDReader::readHeader allocates (and zero-fills) POINTS × point_step bytes as soon as it
+ * parses the POINTS line, before it looks at the data: a 12 kB file claiming 371 million points of
+ * 4 kB each asked for 1.5 TB (found by fuzz_pcd_pipeline in CI), and a claim of a few GB would
+ * really be allocated. So the header is scanned here first, the way PCL scans it (same tokens,
+ * same integer types, the point step as PCL has it when it reaches POINTS), and the claim is
+ * compared with the bytes after the DATA line:
+ * - binary: the data must be there, byte for byte;
+ * - ascii: every value (Σ COUNT per point) is at least one character and a separator, and a
+ *   value takes at most 8 bytes in memory;
+ * - binary_compressed: LZF expands by at most 88× (264 bytes from a 3-byte back reference).
+ * Headers this scan cannot follow are left to PCL, which rejects them. */
+void checkPcdClaimedSize(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, 0, "cannot open file");
+  std::vector<long long> sizes;
+  std::uint32_t point_step = 0, width = 0, height = 0, claimed_step = 0;
+  long long values_per_point = 0, claimed_values = 0;  // numbers per point in ascii (Σ COUNT)
+  unsigned long long claimed_points = 0, claimed_bytes = 0;
+  bool overflow = false, data_line = false;
+  std::size_t points_line = 0, line_number = 0;
+  std::string line, data_type = "ascii";  // PCL's default when there is no DATA line
+  std::streamoff data_start = -1;
+  // SIZE and COUNT entries as PCL reads them: one int per token; a token that does not parse
+  // keeps what the failed extraction stores (0, or the int limit on overflow).
+  auto intEntries = [](const std::string& text) {
+    std::stringstream count(text), read(text);
+    count.imbue(std::locale::classic());
+    read.imbue(std::locale::classic());
+    std::string token;
+    count >> token;
+    read >> token;
+    std::vector<long long> out;
+    while (count >> token) {
+      int x = 0;
+      read >> x;
+      out.push_back(x);
+    }
+    return out;
+  };
+  while (std::getline(in, line)) {
+    ++line_number;
+    if (line.empty()) continue;
+    std::stringstream tokens(line);
+    tokens.imbue(std::locale::classic());
+    std::string key;
+    tokens >> key;
+    if (key.compare(0, 1, "#") == 0 || key.compare(0, 7, "VERSION") == 0 ||
+        key.compare(0, 4, "TYPE") == 0 || key.compare(0, 9, "VIEWPOINT") == 0)
+      continue;
+    if (key.compare(0, 6, "FIELDS") == 0 || key.compare(0, 7, "COLUMNS") == 0) {
+      std::size_t n = 0;
+      for (std::string name; tokens >> name;) ++n;
+      point_step = static_cast<std::uint32_t>(4 * n);  // PCL's default: one float per field
+      values_per_point = static_cast<long long>(n);
+    } else if (key.compare(0, 4, "SIZE") == 0) {
+      sizes = intEntries(line);
+      long long step = 0;
+      for (const long long s : sizes) step += s;
+      point_step = static_cast<std::uint32_t>(step);  // PCL keeps the step in 32 bits
+    } else if (key.compare(0, 5, "COUNT") == 0) {
+      const std::vector<long long> counts = intEntries(line);
+      long long step = 0;
+      values_per_point = 0;
+      for (std::size_t i = 0; i < counts.size(); ++i) {
+        if (i < sizes.size()) step += counts[i] * sizes[i];
+        values_per_point += counts[i];
+      }
+      point_step = static_cast<std::uint32_t>(step);
+    } else if (key.compare(0, 5, "WIDTH") == 0) {
+      tokens >> width;
+    } else if (key.compare(0, 6, "HEIGHT") == 0) {
+      tokens >> height;
+    } else if (key.compare(0, 6, "POINTS") == 0) {
+      // PCL allocates POINTS × point_step right here. Read wider than PCL does (a value PCL would
+      // clamp is refused, never let through) and count WIDTH × HEIGHT too, which it reads later.
+      unsigned long long points = 0;
+      tokens >> points;
+      points = std::max(points, static_cast<unsigned long long>(width) * height);
+      const bool too_many = point_step > 0 && points > ~0ull / point_step;
+      overflow = overflow || too_many;
+      const unsigned long long bytes = too_many ? ~0ull : points * point_step;
+      if (bytes >= claimed_bytes) {
+        claimed_bytes = bytes;
+        claimed_points = points;
+        claimed_step = point_step;
+        claimed_values = values_per_point;
+        points_line = line_number;
+      }
+    } else if (key.compare(0, 4, "DATA") == 0) {
+      tokens >> data_type;
+      data_line = true;
+      data_start = in.tellg();  // -1 when the DATA line is the file's last
+    } else {
+      break;  // the first line that is not a header keyword ends PCL's header scan
+    }
+  }
+  if (claimed_bytes == 0) return;
+  in.clear();
+  in.seekg(0, std::ios::end);
+  const std::streamoff end = in.tellg();
+  const std::streamoff start = data_start >= 0 ? data_start : data_line ? end : std::streamoff(0);
+  const unsigned long long available =
+      end > start ? static_cast<unsigned long long>(end - start) : 0ull;
+  const bool compressed = data_type.compare(0, 17, "binary_compressed") == 0;
+  const bool binary = !compressed && data_type.compare(0, 6, "binary") == 0;
+  bool fits = !overflow;
+  if (fits && binary) fits = claimed_bytes <= available;
+  if (fits && compressed) fits = claimed_bytes <= 88 * available;
+  if (fits && !binary && !compressed) {
+    // Each point's line holds its values, each at least one character plus a separator (or the
+    // newline); the last line may lack its newline. A value is at most 8 bytes in memory.
+    const unsigned long long text_per_point =
+        2 * static_cast<unsigned long long>(std::max(claimed_values, 1ll));
+    fits = claimed_points <= (available + 1) / text_per_point &&
+           claimed_bytes <= 8 * available + claimed_step;
+  }
+  if (fits) return;
+  std::ostringstream why;
+  why << "header claims " << claimed_points << " points of " << claimed_step << " bytes ("
+      << std::setprecision(3) << double(claimed_points) * double(claimed_step) / 1e6
+      << " MB) but the file holds only " << available << " bytes of " << data_type << " data";
+  throw InputError(path, points_line, why.str());
+}
+
 void readPcdHeader(const std::string& path, pcl::PCLPointCloud2& header, Eigen::Vector4f& origin,
                    Eigen::Quaternionf& orientation) {
+  checkPcdClaimedSize(path);
   pcl::PCDReader reader;
   int version = 0, data_type = 0;
   unsigned int data_idx = 0;
