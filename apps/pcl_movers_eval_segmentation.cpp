@@ -35,10 +35,7 @@ namespace {
 
 struct Options {
   // ground
-  float distance = pcl_movers::GroundPlaneFilter<Point>().getDistanceThreshold();
-  float tilt_deg = pcl_movers::GroundPlaneFilter<Point>().getMaxTilt() * 180.f / float(M_PI);
-  float sensor_height = pcl_movers::GroundPlaneFilter<Point>().getSensorHeight();
-  int sectors = pcl_movers::GroundPlaneFilter<Point>().getNumSectors();
+  pcl_movers::tools::GroundOptions ground;
   bool local_slope = pcl_movers::GroundPlaneFilter<Point>().getLocalSlopeCheck();
   float local_slope_deg =
       pcl_movers::GroundPlaneFilter<Point>().getMaxLocalSlope() * 180.f / float(M_PI);
@@ -81,10 +78,7 @@ void printHelp(const char* argv0) {
       "  --sensor NAME      beam layout used to organize unorganized scans: hdl64, hdl32, vlp16,\n"
       "                     os1_64, ladar2d (default %s)\n\n"
       "Ground removal:\n"
-      "  --distance M       ground if within M of the local plane (default %g)\n"
-      "  --tilt-deg D       steepest ground plane (default %g)\n"
-      "  --sensor-height M  sensor height above the ground (default %g)\n"
-      "  --sectors N        azimuth sectors (default %d)\n"
+      "%s"
       "  --local-slope-deg D  steepest rise to a column neighbour still ground (default %g)\n"
       "  --range-noise M    height noise forgiven by the local-slope test (default %g)\n"
       "  --slope-band M     column neighbours further than M from their plane are ignored by\n"
@@ -104,9 +98,8 @@ void printHelp(const char* argv0) {
       "  --min-fraction F   share of an instance one cluster must hold (default %g)\n"
       "  --per-frame        also print ground precision/recall of every frame\n"
       "  -h, --help         this help\n",
-      argv0, d.sensor.c_str(), d.distance, d.tilt_deg, d.sensor_height, d.sectors,
-      d.local_slope_deg, d.range_noise, d.slope_band, d.baseline, d.k, d.floor, d.gap, d.bridge,
-      d.min_points, d.min_fraction);
+      argv0, d.sensor.c_str(), d.ground.help().c_str(), d.local_slope_deg, d.range_noise,
+      d.slope_band, d.baseline, d.k, d.floor, d.gap, d.bridge, d.min_points, d.min_fraction);
 }
 
 using pcl_movers::tools::parseNumber;
@@ -216,10 +209,7 @@ void scoreFrame(const Frame& frame, const Options& opt, Result& result) {
   for (std::size_t i = 0; i < n; ++i) unplaced += !placed[i];
 
   auto configure = [&opt](pcl_movers::GroundPlaneFilter<Point>& f) {
-    f.setDistanceThreshold(opt.distance);
-    f.setMaxTilt(opt.tilt_deg * float(M_PI) / 180.f);
-    f.setSensorHeight(opt.sensor_height);
-    f.setNumSectors(opt.sectors);
+    opt.ground.applyTo(f);
     f.setLocalSlopeCheck(opt.local_slope);
     f.setMaxLocalSlope(opt.local_slope_deg * float(M_PI) / 180.f);
     f.setRangeNoise(opt.range_noise);
@@ -249,7 +239,7 @@ void scoreFrame(const Frame& frame, const Options& opt, Result& result) {
     for (const auto i : ground)
       if (!placed[i]) is_ground[i] = 1;
   }
-  const float z0 = cloud->sensor_origin_.z() - opt.sensor_height + opt.baseline;
+  const float z0 = cloud->sensor_origin_.z() - opt.ground.sensor_height + opt.baseline;
   for (std::size_t i = 0; i < n; ++i) is_baseline[i] = (*cloud)[i].z < z0;
   const auto truth = pcl_movers::eval::groundTruthFromLabels(labels);
   const auto frame_score = pcl_movers::eval::scoreGround(truth, is_ground);
@@ -325,11 +315,11 @@ std::string pct(double v) {
 }
 
 int run(int argc, char** argv) {
-  const std::vector<std::string> with_value = {
-      "--kitti",       "--sequence",      "--frames",     "--sensor",       "--distance",
-      "--tilt-deg",    "--sensor-height", "--sectors",    "--baseline",     "--k",
-      "--floor",       "--gap",           "--min-points", "--min-fraction", "--local-slope-deg",
-      "--range-noise", "--slope-band",    "--bridge"};
+  std::vector<std::string> with_value = pcl_movers::tools::GroundOptions::flags();
+  for (const char* flag : {"--kitti", "--sequence", "--frames", "--sensor", "--baseline", "--k",
+                           "--floor", "--gap", "--min-points", "--min-fraction",
+                           "--local-slope-deg", "--range-noise", "--slope-band", "--bridge"})
+    with_value.push_back(flag);
   pcl_movers::tools::checkArguments(argc, argv, {"-h", "--help", "--no-local-slope", "--per-frame"},
                                     with_value);
   const auto positional = pcl_movers::tools::positionalArguments(argc, argv, with_value);
@@ -338,16 +328,7 @@ int run(int argc, char** argv) {
                      "' (inputs are given with --kitti / --sequence; see -h)");
   Options opt;
   std::string v;
-  if (pcl::console::parse_argument(argc, argv, "--distance", v) >= 0)
-    opt.distance = positive("--distance", v);
-  if (pcl::console::parse_argument(argc, argv, "--tilt-deg", v) >= 0) {
-    opt.tilt_deg = nonNegative("--tilt-deg", v);
-    if (opt.tilt_deg >= 90) throw InputError("--tilt-deg: must be below 90");
-  }
-  if (pcl::console::parse_argument(argc, argv, "--sensor-height", v) >= 0)
-    opt.sensor_height = nonNegative("--sensor-height", v);
-  if (pcl::console::parse_argument(argc, argv, "--sectors", v) >= 0)
-    opt.sectors = integer("--sectors", v, 1);
+  opt.ground.parse(argc, argv);
   if (pcl::console::parse_argument(argc, argv, "--local-slope-deg", v) >= 0) {
     opt.local_slope_deg = nonNegative("--local-slope-deg", v);
     if (opt.local_slope_deg >= 90) throw InputError("--local-slope-deg: must be below 90");
@@ -415,8 +396,9 @@ int run(int argc, char** argv) {
       "floor %g m, gap %d, row bridge %g m); instances with >= %d points, recovered = one cluster "
       "holds >= %g %% "
       "of them.\n\n",
-      opt.distance, opt.tilt_deg, opt.sectors, slope_text, -opt.sensor_height + opt.baseline, opt.k,
-      opt.floor, opt.gap, opt.bridge, opt.min_points, 100.0 * opt.min_fraction);
+      opt.ground.distance, opt.ground.tilt_deg, opt.ground.sectors, slope_text,
+      -opt.ground.sensor_height + opt.baseline, opt.k, opt.floor, opt.gap, opt.bridge,
+      opt.min_points, 100.0 * opt.min_fraction);
   std::printf(
       "| data | frames | ground precision | ground recall | baseline precision | baseline recall "
       "|\n|---|---|---|---|---|---|\n");

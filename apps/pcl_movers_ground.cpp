@@ -27,10 +27,7 @@ using Cloud = pcl::PointCloud<Point>;
 namespace {
 
 struct Options {
-  float distance = pcl_movers::GroundPlaneFilter<Point>().getDistanceThreshold();
-  float tilt_deg = pcl_movers::GroundPlaneFilter<Point>().getMaxTilt() * 180.f / float(M_PI);
-  float sensor_height = pcl_movers::GroundPlaneFilter<Point>().getSensorHeight();
-  int sectors = pcl_movers::GroundPlaneFilter<Point>().getNumSectors();
+  pcl_movers::tools::GroundOptions ground;
   std::string mode = "label";
   bool overwrite = false;
 };
@@ -55,13 +52,10 @@ void printHelp(const char* argv0) {
       "  ground     only the ground points (same layout rule)\n\n"
       "Options:\n"
       "  --mode M           label, nonground or ground (default %s)\n"
-      "  --distance M       ground if within M metres of its cell's plane (default %g)\n"
-      "  --tilt-deg D       steepest plane taken for ground [deg] (default %g)\n"
-      "  --sensor-height M  sensor height above the ground under it [m] (default %g)\n"
-      "  --sectors N        azimuth sectors of the polar cells (default %d)\n"
+      "%s"
       "  --overwrite        replace existing output files\n"
       "  -h, --help         this help\n",
-      argv0, d.mode.c_str(), d.distance, d.tilt_deg, d.sensor_height, d.sectors);
+      argv0, d.mode.c_str(), d.ground.help().c_str());
 }
 
 using pcl_movers::tools::labelledBlob;
@@ -74,10 +68,7 @@ void processOne(const std::string& in, const std::string& out, const Options& op
   const Cloud::Ptr cloud = readScanChecked(in);
   // extract_removed_indices = true: keep-organized output needs them (PCL warns otherwise).
   pcl_movers::GroundPlaneFilter<Point> filter(true);
-  filter.setDistanceThreshold(opt.distance);
-  filter.setMaxTilt(opt.tilt_deg * float(M_PI) / 180.f);
-  filter.setSensorHeight(opt.sensor_height);
-  filter.setNumSectors(opt.sectors);
+  opt.ground.applyTo(filter);
   filter.setInputCloud(cloud);
   pcl::PCLPointCloud2 blob;
   const auto t0 = std::chrono::steady_clock::now();
@@ -114,8 +105,8 @@ void processOne(const std::string& in, const std::string& out, const Options& op
 }
 
 int run(int argc, char** argv) {
-  const std::vector<std::string> with_value = {"--mode", "--distance", "--tilt-deg",
-                                               "--sensor-height", "--sectors"};
+  std::vector<std::string> with_value = pcl_movers::tools::GroundOptions::flags();
+  with_value.push_back("--mode");
   pcl_movers::tools::checkArguments(argc, argv, {"-h", "--help", "--overwrite"}, with_value);
   const auto positional = pcl_movers::tools::positionalArguments(argc, argv, with_value);
   if (positional.size() != 2)
@@ -129,23 +120,7 @@ int run(int argc, char** argv) {
       throw InputError("--mode: expected label, nonground or ground, got '" + v + "'");
     opt.mode = v;
   }
-  if (pcl::console::parse_argument(argc, argv, "--distance", v) >= 0) {
-    opt.distance = static_cast<float>(parseNumber("--distance", v));
-    if (!(opt.distance > 0)) throw InputError("--distance: must be > 0, got '" + v + "'");
-  }
-  if (pcl::console::parse_argument(argc, argv, "--tilt-deg", v) >= 0) {
-    opt.tilt_deg = static_cast<float>(parseNumber("--tilt-deg", v));
-    if (opt.tilt_deg < 0 || opt.tilt_deg >= 90)
-      throw InputError("--tilt-deg: must be in [0, 90), got '" + v + "'");
-  }
-  if (pcl::console::parse_argument(argc, argv, "--sensor-height", v) >= 0)
-    opt.sensor_height = static_cast<float>(parseNumber("--sensor-height", v));
-  if (pcl::console::parse_argument(argc, argv, "--sectors", v) >= 0) {
-    const double s = parseNumber("--sectors", v);
-    if (s < 1 || s > 4096 || s != std::floor(s))
-      throw InputError("--sectors: expected an integer in 1..4096, got '" + v + "'");
-    opt.sectors = static_cast<int>(s);
-  }
+  opt.ground.parse(argc, argv);
 
   const std::string& input = positional[0];
   const std::string& output = positional[1];

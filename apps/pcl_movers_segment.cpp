@@ -32,9 +32,7 @@ using Cloud = pcl::PointCloud<Point>;
 namespace {
 
 struct Options {
-  float distance = pcl_movers::GroundPlaneFilter<Point>().getDistanceThreshold();
-  float tilt_deg = pcl_movers::GroundPlaneFilter<Point>().getMaxTilt() * 180.f / float(M_PI);
-  float sensor_height = pcl_movers::GroundPlaneFilter<Point>().getSensorHeight();
+  pcl_movers::tools::GroundOptions ground;
   bool keep_ground = false;
   std::string sensor = "hdl64";
   float k = pcl_movers::RangeImageRegionGrowing<Point>().getDepthThresholdFactor();
@@ -72,13 +70,10 @@ void printHelp(const char* argv0) {
       "                     around (360-degree sensors): hdl64, hdl32, vlp16, os1_64, ladar2d\n"
       "                     (default %s)\n"
       "  --keep-ground      do not remove the ground first\n"
-      "  --distance M       ground if within M of its local plane (default %g)\n"
-      "  --tilt-deg D       steepest ground plane [deg] (default %g)\n"
-      "  --sensor-height M  sensor height above the ground [m] (default %g)\n"
+      "%s"
       "  --overwrite        replace existing output files\n"
       "  -h, --help         this help\n",
-      argv0, d.k, d.floor, d.gap, d.min_size, d.sensor.c_str(), d.distance, d.tilt_deg,
-      d.sensor_height);
+      argv0, d.k, d.floor, d.gap, d.min_size, d.sensor.c_str(), d.ground.help().c_str());
 }
 
 using pcl_movers::tools::labelledBlob;
@@ -98,9 +93,7 @@ void processOne(const std::string& in, const std::string& out, const Options& op
   std::vector<std::uint8_t> is_ground(n, 0);
   if (!opt.keep_ground) {
     pcl_movers::GroundPlaneFilter<Point> filter;
-    filter.setDistanceThreshold(opt.distance);
-    filter.setMaxTilt(opt.tilt_deg * float(M_PI) / 180.f);
-    filter.setSensorHeight(opt.sensor_height);
+    opt.ground.applyTo(filter);
     filter.setInputCloud(cloud);
     filter.setNegative(true);
     pcl::Indices ground;
@@ -171,9 +164,9 @@ int parseCount(const std::string& flag, const std::string& text, int min) {
 }
 
 int run(int argc, char** argv) {
-  const std::vector<std::string> with_value = {"--k",        "--floor",    "--gap",
-                                               "--min-size", "--max-size", "--sensor",
-                                               "--distance", "--tilt-deg", "--sensor-height"};
+  std::vector<std::string> with_value = pcl_movers::tools::GroundOptions::flags();
+  for (const char* flag : {"--k", "--floor", "--gap", "--min-size", "--max-size", "--sensor"})
+    with_value.push_back(flag);
   pcl_movers::tools::checkArguments(argc, argv, {"-h", "--help", "--overwrite", "--keep-ground"},
                                     with_value);
   const auto positional = pcl_movers::tools::positionalArguments(argc, argv, with_value);
@@ -201,17 +194,7 @@ int run(int argc, char** argv) {
   if (opt.max_size < opt.min_size) throw InputError("--max-size must be >= --min-size");
   if (pcl::console::parse_argument(argc, argv, "--sensor", v) >= 0) opt.sensor = v;
   pcl_movers::SensorModel::fromName(opt.sensor);  // throws InputError on an unknown name
-  if (pcl::console::parse_argument(argc, argv, "--distance", v) >= 0) {
-    opt.distance = static_cast<float>(parseNumber("--distance", v));
-    if (!(opt.distance > 0)) throw InputError("--distance: must be > 0, got '" + v + "'");
-  }
-  if (pcl::console::parse_argument(argc, argv, "--tilt-deg", v) >= 0) {
-    opt.tilt_deg = static_cast<float>(parseNumber("--tilt-deg", v));
-    if (opt.tilt_deg < 0 || opt.tilt_deg >= 90)
-      throw InputError("--tilt-deg: must be in [0, 90), got '" + v + "'");
-  }
-  if (pcl::console::parse_argument(argc, argv, "--sensor-height", v) >= 0)
-    opt.sensor_height = static_cast<float>(parseNumber("--sensor-height", v));
+  opt.ground.parse(argc, argv);
 
   const std::string& input = positional[0];
   const std::string& output = positional[1];

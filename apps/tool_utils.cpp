@@ -84,6 +84,52 @@ double parseNumber(const std::string& flag, const std::string& text) {
   return v;
 }
 
+GroundOptions::GroundOptions() {
+  const GroundPlaneFilter<pcl::PointXYZ> defaults;
+  distance = defaults.getDistanceThreshold();
+  tilt_deg = defaults.getMaxTilt() * 180.f / float(M_PI);
+  sensor_height = defaults.getSensorHeight();
+  sectors = defaults.getNumSectors();
+}
+
+std::vector<std::string> GroundOptions::flags() {
+  return {"--distance", "--tilt-deg", "--sensor-height", "--sectors"};
+}
+
+void GroundOptions::parse(int argc, char** argv) {
+  std::string v;
+  if (pcl::console::parse_argument(argc, argv, "--distance", v) >= 0) {
+    distance = static_cast<float>(parseNumber("--distance", v));
+    if (!(distance > 0)) throw InputError("--distance: must be > 0, got '" + v + "'");
+  }
+  if (pcl::console::parse_argument(argc, argv, "--tilt-deg", v) >= 0) {
+    tilt_deg = static_cast<float>(parseNumber("--tilt-deg", v));
+    if (tilt_deg < 0 || tilt_deg >= 90)
+      throw InputError("--tilt-deg: must be in [0, 90), got '" + v + "'");
+  }
+  if (pcl::console::parse_argument(argc, argv, "--sensor-height", v) >= 0) {
+    sensor_height = static_cast<float>(parseNumber("--sensor-height", v));
+    if (sensor_height < 0) throw InputError("--sensor-height: must be >= 0, got '" + v + "'");
+  }
+  if (pcl::console::parse_argument(argc, argv, "--sectors", v) >= 0) {
+    const double s = parseNumber("--sectors", v);
+    if (s < 1 || s > 4096 || s != std::floor(s))
+      throw InputError("--sectors: expected an integer in 1..4096, got '" + v + "'");
+    sectors = static_cast<int>(s);
+  }
+}
+
+std::string GroundOptions::help() const {
+  char text[512];
+  std::snprintf(text, sizeof(text),
+                "  --distance M       ground if within M metres of its cell's plane (default %g)\n"
+                "  --tilt-deg D       steepest plane taken for ground [deg] (default %.3g)\n"
+                "  --sensor-height M  sensor height above the ground under it [m] (default %g)\n"
+                "  --sectors N        azimuth sectors of the polar cells (default %d)\n",
+                distance, tilt_deg, sensor_height, sectors);
+  return text;
+}
+
 pcl::PointCloud<pcl::PointXYZI>::Ptr readScanChecked(const std::string& path) {
   auto cloud = pcl::make_shared<pcl::PointCloud<pcl::PointXYZI>>();
   io::readScan(path, *cloud);

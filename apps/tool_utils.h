@@ -6,6 +6,7 @@
 #pragma once
 
 #include <pcl_movers/common.h>
+#include <pcl_movers/ground_plane_filter.h>
 
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/console/parse.h>
@@ -66,6 +67,31 @@ void labelledBlob(const pcl::PointCloud<pcl::PointXYZI>& cloud,
  * never leaves a half-written file. Throws InputError. */
 void writeAtomically(const std::string& path,
                      const std::function<int(pcl::PCDWriter&, const std::string&)>& write);
+
+/** \brief The GroundPlaneFilter options shared by the tools that remove the ground
+ * (pcl_movers_ground, pcl_movers_segment, pcl_movers_eval_segmentation): one parser, one help
+ * text and defaults taken from the filter itself, so the three cannot drift apart. */
+struct GroundOptions {
+  float distance;       ///< --distance M: ground if within M of its cell's plane
+  float tilt_deg;       ///< --tilt-deg D: steepest plane taken for ground
+  float sensor_height;  ///< --sensor-height M: sensor above the ground under it
+  int sectors;          ///< --sectors N: azimuth sectors of the polar cells
+
+  GroundOptions();  ///< the filter's defaults
+  /** \brief The options above (each takes a value), for checkArguments(). */
+  static std::vector<std::string> flags();
+  /** \brief Reads the options present in argv; throws InputError naming the flag. */
+  void parse(int argc, char** argv);
+  /** \brief Help lines for the options, with these values as defaults. */
+  std::string help() const;
+  template <typename PointT>
+  void applyTo(GroundPlaneFilter<PointT>& filter) const {
+    filter.setDistanceThreshold(distance);
+    filter.setMaxTilt(tilt_deg * float(M_PI) / 180.f);
+    filter.setSensorHeight(sensor_height);
+    filter.setNumSectors(sectors);
+  }
+};
 
 /** \brief Runs `body`, turns exceptions into a clear "[tool] error: ..." and exit code 1. */
 int runTool(const char* tool_name, const std::function<int()>& body);
