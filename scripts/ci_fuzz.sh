@@ -14,8 +14,9 @@
 # second each as run one after the other on an otherwise idle machine.
 # FUZZ_SEED (environment): libFuzzer's -seed. Unset or 0, libFuzzer draws one (exploration: run
 # it long and often before a release). CI sets a fixed seed so a commit's fuzz result can be
-# replayed exactly: the same seed runs the same input sequence, a faster machine just gets
-# further along it (`FUZZ_SEED=N scripts/ci_fuzz.sh build-fuzz 300` covers what CI reaches in 60 s).
+# replayed: the same seed on the same build runs the same input sequence, a faster machine just
+# gets further along it (`FUZZ_SEED=1 scripts/ci_fuzz.sh build-san 300` on the sanitizer build of
+# scripts/ci_sanitizers.sh, with its build-san/fuzz-corpus removed, covers what CI reaches in 60 s).
 # Needs: clang, libclang-rt-14-dev (Debian bookworm) or the matching compiler-rt for your clang.
 # Usage: [FUZZ_SEED=N] scripts/ci_fuzz.sh [BUILD_DIR] [SECONDS] [JOBS]
 set -euo pipefail
