@@ -430,8 +430,9 @@ void RangeImageOrganizer<PointT>::placeBlock(std::size_t begin, std::size_t end)
   constexpr int kStride = int(sizeof(PointT) / sizeof(float));
   if constexpr (kStride == 4 || kStride == 8) {
     const float* first = &in[begin].x;
-    if (!indices && m % 16 == 0 && detail::organizerHasAvx512() && first == &in[begin].data[0] &&
-        &in[begin].y == first + 1 && &in[begin].z == first + 2) {
+    if (!indices && m % 16 == 0 && detail::organizerHasAvx512() &&
+        first == reinterpret_cast<const float*>(in + begin) && &in[begin].y == first + 1 &&
+        &in[begin].z == first + 2) {
       detail::organizerKernelAvx512x16<kStride>(c, first, nullptr, nullptr, m, bw, bt, status,
                                                 table_cell, column_code, rows);
       done = true;
