@@ -5,6 +5,9 @@
  *   bench_organizer               Google Benchmark timings on frame 0
  *   bench_organizer --report      one Markdown section over all frames (scripts/bench_organizer.sh)
  *   bench_organizer --speed N     only the side-by-side speed comparison, N times
+ *   bench_organizer --digest      hashes of the outputs on all frames (index map, cells, organized
+ *                                 cloud bytes, counters; PointXYZI and PointXYZ, scan order and
+ *                                 shuffled), to check that an optimization changes no output
  *
  * SPDX-License-Identifier: BSD-3-Clause
  */
@@ -23,11 +26,13 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <ctime>
 #include <filesystem>
+#include <random>
 #include <string>
 #include <utility>
 #include <vector>
@@ -267,6 +272,55 @@ int speedOnly(int repeats) {
   return 0;
 }
 
+/** FNV-1a over raw bytes. */
+void fnv(std::uint64_t& h, const void* data, std::size_t size) {
+  const auto* p = static_cast<const unsigned char*>(data);
+  for (std::size_t i = 0; i < size; ++i) h = (h ^ p[i]) * 1099511628211ull;
+}
+
+template <typename PointT>
+std::uint64_t digestOf(const std::vector<typename pcl::PointCloud<PointT>::Ptr>& clouds) {
+  std::uint64_t h = 1469598103934665603ull;
+  pcl_movers::RangeImageOrganizer<PointT> organizer;
+  organizer.setSensorModel(pcl_movers::SensorModel::hdl64());
+  pcl::PointCloud<PointT> out;
+  for (const auto& cloud : clouds) {
+    organizer.setInputCloud(cloud);
+    organizer.organize(out);
+    fnv(h, organizer.getIndexImage().data(), organizer.getIndexImage().size() * sizeof(int));
+    fnv(h, organizer.getCellOfPoint().data(), organizer.getCellOfPoint().size() * sizeof(int));
+    fnv(h, out.points.data(), out.points.size() * sizeof(PointT));
+    const std::size_t counts[] = {organizer.getDisplacedCount(), organizer.getShiftedCount(),
+                                  organizer.getInvalidCount(),   organizer.getOutOfViewCount(),
+                                  std::size_t(out.width),        std::size_t(out.height)};
+    fnv(h, counts, sizeof(counts));
+  }
+  return h;
+}
+
+/** Output hashes over all frames: equal hashes before and after a change = identical output. */
+int digest() {
+  const auto paths = framePaths();
+  if (paths.empty()) {
+    std::printf("KITTI data not found (%s)\n", kSequence.c_str());
+    return 1;
+  }
+  std::vector<Cloud::Ptr> clouds, shuffled;
+  std::vector<pcl::PointCloud<pcl::PointXYZ>::Ptr> xyz;
+  std::mt19937 rng(7);
+  for (const auto& path : paths) {
+    clouds.push_back(load(path));
+    xyz.emplace_back(new pcl::PointCloud<pcl::PointXYZ>);
+    pcl::copyPointCloud(*clouds.back(), *xyz.back());
+    shuffled.emplace_back(new Cloud(*clouds.back()));
+    std::shuffle(shuffled.back()->points.begin(), shuffled.back()->points.end(), rng);
+  }
+  std::printf("PointXYZI %016llx\n", (unsigned long long)digestOf<pcl::PointXYZI>(clouds));
+  std::printf("PointXYZ  %016llx\n", (unsigned long long)digestOf<pcl::PointXYZ>(xyz));
+  std::printf("shuffled  %016llx\n", (unsigned long long)digestOf<pcl::PointXYZI>(shuffled));
+  return 0;
+}
+
 int report() {
   const auto paths = framePaths();
   if (paths.empty()) {
@@ -457,6 +511,8 @@ int report() {
 int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i)
     if (std::strcmp(argv[i], "--report") == 0) return report();
+  for (int i = 1; i < argc; ++i)
+    if (std::strcmp(argv[i], "--digest") == 0) return digest();
   for (int i = 1; i + 1 < argc; ++i)
     if (std::strcmp(argv[i], "--speed") == 0) return speedOnly(std::atoi(argv[i + 1]));
   benchmark::Initialize(&argc, argv);

@@ -427,10 +427,11 @@ TEST(RangeImageOrganizer, VectorizedKernelMatchesTheScalarReference) {
 
 TEST(RangeImageOrganizer, EveryKernelVariantMatchesTheScalarReference) {
   // Each vectorized kernel the CPU runs (SSE2 through organizerKernel's fallback is covered
-  // above; here AVX2 and AVX-512VL explicitly), on points that come in runs of one row (the
-  // shortcut that confirms the previous row) and on shuffled ones, with a row table consistent
-  // with its mid-lines as prepareLookup builds it: horizontal mid-lines 0.0075 apart, table
-  // cells of 0.00125, a cell holding a mid-line within 1e-4 (a float rounding away) ambiguous.
+  // above; here AVX2 and AVX-512 explicitly, and SSE2 through a count not a multiple of 8), on
+  // points that come in runs of one row (the shortcut that confirms the previous row) and on
+  // shuffled ones, with a row table consistent with its mid-lines as prepareLookup builds it:
+  // horizontal mid-lines 0.0075 apart, table cells of 0.00125, a cell holding a mid-line within
+  // 1e-4 (a float rounding away) ambiguous.
   pcl_movers::detail::OrganizerKernelParams c = kernelTableParams();
   c.min_range2 = 0.f;
   c.upper_limit = 0.035f;
@@ -483,7 +484,7 @@ TEST(RangeImageOrganizer, EveryKernelVariantMatchesTheScalarReference) {
   x.push_back(std::nanf(""));
   y.push_back(0.f);
   z.push_back(0.f);
-  while (x.size() % 8 != 0) {
+  while (x.size() % 16 != 0) {
     x.push_back(-5.f);  // azimuth exactly pi
     y.push_back(0.f);
     z.push_back(0.f);
@@ -493,10 +494,10 @@ TEST(RangeImageOrganizer, EveryKernelVariantMatchesTheScalarReference) {
   std::vector<int> s1(n), s2(n), g1(n), g2(n), c1(n), c2(n), r1(n), r2(n);
   pcl_movers::detail::organizerKernelScalar(c, x.data(), y.data(), z.data(), n, w1.data(),
                                             t1.data(), s1.data(), g1.data(), c1.data(), r1.data());
-  auto compare = [&](const char* name) {
+  auto compare = [&](const char* name, std::size_t count) {
     SCOPED_TRACE(name);
     std::size_t placed = 0, resolved = 0;
-    for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t i = 0; i < count; ++i) {
       ASSERT_EQ(s1[i], s2[i]) << i;
       if (s1[i] != 0) continue;
       ++placed;
@@ -511,25 +512,141 @@ TEST(RangeImageOrganizer, EveryKernelVariantMatchesTheScalarReference) {
         ASSERT_TRUE(t1[i] < (r2[i] > 0 ? mid_a[r2[i] - 1] : 1e9f) && t1[i] >= mid_a[r2[i]]) << i;
       resolved += r1[i] >= 0;
     }
-    EXPECT_GT(placed, n * 8 / 10);
+    EXPECT_GT(placed, count * 8 / 10);
     EXPECT_GT(resolved, placed * 8 / 10);
+  };
+  auto clear = [&] {  // so that a kernel that skips lanes cannot pass on the previous results
+    std::fill(s2.begin(), s2.end(), -7);
+    std::fill(c2.begin(), c2.end(), -7);
+    std::fill(r2.begin(), r2.end(), -7);
   };
 #if defined(PCL_MOVERS_ORGANIZER_AVX2)
   if (pcl_movers::detail::organizerHasAvx2()) {
+    clear();
     pcl_movers::detail::organizerKernelAvx2(c, x.data(), y.data(), z.data(), n, w2.data(),
                                             t2.data(), s2.data(), g2.data(), c2.data(), r2.data());
-    compare("AVX2");
+    compare("AVX2", n);
   }
   if (pcl_movers::detail::organizerHasAvx512()) {
-    pcl_movers::detail::organizerKernelAvx512(c, x.data(), y.data(), z.data(), n, w2.data(),
-                                              t2.data(), s2.data(), g2.data(), c2.data(),
-                                              r2.data());
-    compare("AVX-512VL");
+    clear();
+    pcl_movers::detail::organizerKernelAvx512x16<0>(c, x.data(), y.data(), z.data(), n, w2.data(),
+                                                    t2.data(), s2.data(), g2.data(), c2.data(),
+                                                    r2.data());
+    compare("AVX-512 from arrays", n);
+    // Straight from 16- and 32-byte points; the other floats of each point are NaN (PointXYZ's
+    // padding, PointXYZI's intensity and padding) and must not matter.
+    for (const int stride : {4, 8}) {
+      std::vector<float> points(n * std::size_t(stride), std::nanf(""));
+      for (std::size_t i = 0; i < n; ++i) {
+        points[i * std::size_t(stride)] = x[i];
+        points[i * std::size_t(stride) + 1] = y[i];
+        points[i * std::size_t(stride) + 2] = z[i];
+      }
+      clear();
+      if (stride == 4)
+        pcl_movers::detail::organizerKernelAvx512x16<4>(c, points.data(), nullptr, nullptr, n,
+                                                        w2.data(), t2.data(), s2.data(), g2.data(),
+                                                        c2.data(), r2.data());
+      else
+        pcl_movers::detail::organizerKernelAvx512x16<8>(c, points.data(), nullptr, nullptr, n,
+                                                        w2.data(), t2.data(), s2.data(), g2.data(),
+                                                        c2.data(), r2.data());
+      compare(stride == 4 ? "AVX-512 from 16-byte points" : "AVX-512 from 32-byte points", n);
+    }
   }
 #endif
+  clear();
   pcl_movers::detail::organizerKernel(c, x.data(), y.data(), z.data(), n, w2.data(), t2.data(),
                                       s2.data(), g2.data(), c2.data(), r2.data());
-  compare("dispatched");
+  compare("dispatched", n);
+  // A count that is a multiple of 4 but not of 8: the SSE2 fallback every x86-64 CPU runs (the
+  // kernel a CPU without AVX2 or AVX-512 uses for all points).
+  clear();
+  pcl_movers::detail::organizerKernel(c, x.data(), y.data(), z.data(), n - 4, w2.data(), t2.data(),
+                                      s2.data(), g2.data(), c2.data(), r2.data());
+  compare("SSE2", n - 4);
+}
+
+TEST(RangeImageOrganizer, PointsReadInPlaceMatchCopiedPoints) {
+  // Without indices, whole blocks of 16 points are read by the AVX-512 kernel straight from the
+  // cloud (PointXYZ and PointXYZI); with indices, and for the last partial block, the points are
+  // copied into arrays first. Same cells either way: a scan in recording order with collisions
+  // (the free-neighbour rule and nearest-wins both run), NaN/Inf points, points on the ±pi seam,
+  // nearer than 1 m and beyond the field of view, trimmed to sizes that are and are not multiples
+  // of 16.
+  const SensorModel model = SensorModel::hdl64();
+  std::mt19937 rng(53);
+  std::uniform_real_distribution<float> unit(0.f, 1.f);
+  Cloud::Ptr scan(new Cloud);
+  const float inf = std::numeric_limits<float>::infinity();
+  for (int r = 0; r < 64; ++r) {
+    // More points than columns per turn: collisions.
+    const int length = 1000 + int(unit(rng) * 3000.f);
+    for (int j = 0; j < length; ++j) {
+      pcl::PointXYZI p;
+      const float u = unit(rng);
+      const float rho = u < 0.03f ? 0.4f + 0.5f * unit(rng) : 1.5f + 70.f * unit(rng);
+      const float a = float(M_PI) - float(2 * M_PI) * float(j) / float(length);
+      const float e = model.elevations()[r] + 0.004f * (unit(rng) - 0.5f);
+      p.x = rho * std::cos(a);
+      p.y = j == 0 ? (r % 2 ? 0.f : -0.f) : rho * std::sin(a);  // j == 0: azimuth exactly ±pi
+      if (j == 0) p.x = -rho;
+      p.z = u > 0.99f ? 5.f * rho : rho * std::tan(e) + model.verticalOffsets()[r];  // above all
+      p.intensity = float(scan->size());
+      if (u > 0.97f && u <= 0.98f) p.x = std::nanf("");
+      if (u > 0.98f && u <= 0.99f) p.y = unit(rng) < 0.5f ? inf : -inf;
+      scan->push_back(p);
+    }
+  }
+  for (const std::size_t trim : {0, 1, 7, 15, 16}) {
+    SCOPED_TRACE(trim);
+    Cloud::Ptr cloud(new Cloud);
+    cloud->points.assign(scan->points.begin(), scan->points.end() - long(trim));
+    cloud->width = std::uint32_t(cloud->size());
+    cloud->height = 1;
+    pcl::PointCloud<pcl::PointXYZ>::Ptr xyz(new pcl::PointCloud<pcl::PointXYZ>);
+    for (const auto& p : *cloud) xyz->push_back(pcl::PointXYZ(p.x, p.y, p.z));
+    pcl::IndicesPtr all(new pcl::Indices(cloud->size()));
+    std::iota(all->begin(), all->end(), 0);
+    RangeImageOrganizer<pcl::PointXYZI> direct, copied;
+    RangeImageOrganizer<pcl::PointXYZ> direct_xyz;
+    for (auto* organizer : {&direct, &copied}) organizer->setSensorModel(model);
+    direct_xyz.setSensorModel(model);
+    direct.setInputCloud(cloud);
+    copied.setInputCloud(cloud);
+    copied.setIndices(all);
+    direct_xyz.setInputCloud(xyz);
+    Cloud out_direct, out_copied;
+    pcl::PointCloud<pcl::PointXYZ> out_xyz;
+    direct.organize(out_direct);
+    copied.organize(out_copied);
+    direct_xyz.organize(out_xyz);
+    EXPECT_GT(direct.getShiftedCount(), 100u);
+    EXPECT_GT(direct.getDisplacedCount(), 10u);
+    EXPECT_GT(direct.getInvalidCount(), 100u);
+    EXPECT_GT(direct.getOutOfViewCount(), 100u);
+    for (const auto* o : {&copied}) {
+      EXPECT_EQ(o->getShiftedCount(), direct.getShiftedCount());
+      EXPECT_EQ(o->getDisplacedCount(), direct.getDisplacedCount());
+      EXPECT_EQ(o->getInvalidCount(), direct.getInvalidCount());
+      EXPECT_EQ(o->getOutOfViewCount(), direct.getOutOfViewCount());
+      ASSERT_TRUE(o->getIndexImage() == direct.getIndexImage());
+      ASSERT_TRUE(o->getCellOfPoint() == direct.getCellOfPoint());
+    }
+    EXPECT_EQ(direct_xyz.getShiftedCount(), direct.getShiftedCount());
+    EXPECT_EQ(direct_xyz.getInvalidCount(), direct.getInvalidCount());
+    ASSERT_TRUE(direct_xyz.getIndexImage() == direct.getIndexImage());
+    ASSERT_TRUE(direct_xyz.getCellOfPoint() == direct.getCellOfPoint());
+    ASSERT_EQ(out_direct.size(), out_copied.size());
+    for (std::size_t c = 0; c < out_direct.size(); ++c) {
+      const int i = direct.getIndexImage()[c];
+      ASSERT_EQ(std::isnan(out_direct[c].x), i < 0) << c;
+      if (i < 0) continue;
+      ASSERT_EQ(out_direct[c].intensity, float(i)) << c;
+      ASSERT_EQ(out_copied[c].intensity, float(i)) << c;
+      ASSERT_EQ(out_xyz[c].x, (*cloud)[std::size_t(i)].x) << c;
+    }
+  }
 }
 
 TEST(RangeImageOrganizer, FastAnglesAndRowTableMatchTheExactAssignment) {

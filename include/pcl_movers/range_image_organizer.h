@@ -34,10 +34,12 @@ namespace pcl_movers {
  *
  * Keep one organizer for a whole sequence: the row/column lookups of the model and all buffers
  * are kept from frame to frame (rebuilt only when the model or the width change). The per-point
- * arithmetic runs 4 points at a time (SSE2), or 8 with AVX2 or AVX-512VL when the CPU has it
- * (chosen at run time); all give the results of the scalar code bit for bit. Input that comes
- * beam after beam, as scanners record it, is fastest: the 8-lane code then confirms the previous
- * point's row instead of looking each row up (any other order gives the same cells).
+ * arithmetic runs 4 points at a time (SSE2), 8 with AVX2 or 16 with AVX-512F when the CPU has it
+ * (chosen at run time); all give the results of the scalar code bit for bit. With AVX-512 and no
+ * indices, 16- and 32-byte points (PointXYZ, PointXYZI) are read in place, without a copy. Input
+ * that comes beam after beam, as scanners record it, is fastest: the AVX2/AVX-512 code then
+ * confirms the previous point's row instead of looking each row up (any other order gives the
+ * same cells).
  *
  * \code
  * pcl_movers::RangeImageOrganizer<pcl::PointXYZI> organizer;

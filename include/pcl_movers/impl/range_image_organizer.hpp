@@ -136,15 +136,21 @@ inline void organizerKernelScalar(const OrganizerKernelParams& c, const float* x
 #undef PCL_MOVERS_ORGANIZER_KERNEL
 #undef PCL_MOVERS_ORGANIZER_SELECT
 #undef PCL_MOVERS_ORGANIZER_KERNEL_ATTRIBUTES
-#define PCL_MOVERS_ORGANIZER_KERNEL organizerKernelAvx512
-#define PCL_MOVERS_ORGANIZER_SELECT organizerSelectAvx512
-#define PCL_MOVERS_ORGANIZER_KERNEL_ATTRIBUTES \
-  __attribute__((target("avx2,avx512f,avx512vl") PCL_MOVERS_ORGANIZER_NO_CONTRACT))
-#include <pcl_movers/impl/range_image_organizer_kernel.hpp>
-#undef PCL_MOVERS_ORGANIZER_KERNEL
-#undef PCL_MOVERS_ORGANIZER_SELECT
-#undef PCL_MOVERS_ORGANIZER_KERNEL_ATTRIBUTES
 #undef PCL_MOVERS_ORGANIZER_NO_CONTRACT
+}  // namespace detail
+}  // namespace pcl_movers
+// GCC 12 reports the undefined pass-through operand of its own AVX-512 intrinsics as maybe
+// uninitialized once they are inlined (GCC bug 105593, fixed in 13).
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#include <pcl_movers/impl/range_image_organizer_kernel16.hpp>
+#pragma GCC diagnostic pop
+#else
+#include <pcl_movers/impl/range_image_organizer_kernel16.hpp>
+#endif
+namespace pcl_movers {
+namespace detail {
 
 /** \brief True when the CPU runs AVX2 (checked once). */
 inline bool organizerHasAvx2() {
@@ -152,23 +158,24 @@ inline bool organizerHasAvx2() {
   return has;
 }
 
-/** \brief True when the CPU runs AVX-512F and AVX-512VL (checked once). */
+/** \brief True when the CPU runs AVX-512F (checked once). */
 inline bool organizerHasAvx512() {
-  static const bool has = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
+  static const bool has = __builtin_cpu_supports("avx512f");
   return has;
 }
 #endif
 
-/** \brief organizerKernelScalar four points at a time with SSE2 (every x86-64 CPU has it; the
- * compiler cannot vectorize the scalar loop itself because of sqrt's errno). The results are
- * identical: the same IEEE operations in the same order. `m` must be a multiple of 4 (pad the
- * arrays). Falls back to the scalar loop elsewhere. */
+/** \brief organizerKernelScalar on arrays: 16 points at a time with AVX-512F when the CPU has it
+ * and `m` is a multiple of 16, 8 with AVX2 when `m` is a multiple of 8, otherwise four points at
+ * a time with SSE2 (every x86-64 CPU has it; the compiler cannot vectorize the scalar loop itself
+ * because of sqrt's errno). The results are identical: the same IEEE operations in the same
+ * order. `m` must be a multiple of 4 (pad the arrays). Falls back to the scalar loop elsewhere. */
 inline void organizerKernel(const OrganizerKernelParams& c, const float* xs, const float* ys,
                             const float* zs, std::size_t m, float* ws, float* ts, int* status,
                             int* table_cell, int* column_code, int* rows) {
 #if defined(PCL_MOVERS_ORGANIZER_AVX2)
-  if (organizerHasAvx512() && m % 8 == 0) {
-    organizerKernelAvx512(c, xs, ys, zs, m, ws, ts, status, table_cell, column_code, rows);
+  if (organizerHasAvx512() && m % 16 == 0) {
+    organizerKernelAvx512x16<0>(c, xs, ys, zs, m, ws, ts, status, table_cell, column_code, rows);
     return;
   }
   if (organizerHasAvx2() && m % 8 == 0) {
@@ -393,17 +400,6 @@ void RangeImageOrganizer<PointT>::placeBlock(std::size_t begin, std::size_t end)
   const PointT* in = input_->points.data();
   const auto* indices = fake_indices_ ? nullptr : indices_->data();
 
-  // Gather into structure-of-arrays for the vectorized kernel; the padding lanes are NaN.
-  const std::size_t padded = (m + 7) & ~std::size_t(7);
-  for (std::size_t k = 0; k < m; ++k) {
-    const PointT& p = in[indices ? std::size_t((*indices_)[begin + k]) : begin + k];
-    bx[k] = p.x;
-    by[k] = p.y;
-    bz[k] = p.z;
-  }
-  for (std::size_t k = m; k < padded; ++k)
-    bx[k] = by[k] = bz[k] = std::numeric_limits<float>::quiet_NaN();
-
   detail::OrganizerKernelParams c;
   c.max_range2 =
       max_range_ > 0.f ? max_range_ * max_range_ : std::numeric_limits<float>::infinity();
@@ -427,7 +423,35 @@ void RangeImageOrganizer<PointT>::placeBlock(std::size_t begin, std::size_t end)
   c.mid_h = mid_h_.data();
   c.ordered_mid_lines = ordered_mid_lines_;
   int* rows = block_row_.data();
-  detail::organizerKernel(c, bx, by, bz, padded, bw, bt, status, table_cell, column_code, rows);
+  // With AVX-512 the kernel reads full blocks of PointXYZ/PointXYZI-like points (x, y, z first,
+  // 16 or 32 bytes) itself; otherwise the points are copied into structure-of-arrays first.
+  bool done = false;
+#if defined(PCL_MOVERS_ORGANIZER_AVX2)
+  constexpr int kStride = int(sizeof(PointT) / sizeof(float));
+  if constexpr (kStride == 4 || kStride == 8) {
+    const float* first = &in[begin].x;
+    if (!indices && m % 16 == 0 && detail::organizerHasAvx512() &&
+        first == reinterpret_cast<const float*>(in + begin) && &in[begin].y == first + 1 &&
+        &in[begin].z == first + 2) {
+      detail::organizerKernelAvx512x16<kStride>(c, first, nullptr, nullptr, m, bw, bt, status,
+                                                table_cell, column_code, rows);
+      done = true;
+    }
+  }
+#endif
+  if (!done) {
+    // Structure-of-arrays for the vectorized kernel; the padding lanes are NaN.
+    const std::size_t padded = (m + 15) & ~std::size_t(15);
+    for (std::size_t k = 0; k < m; ++k) {
+      const PointT& p = in[indices ? std::size_t((*indices_)[begin + k]) : begin + k];
+      bx[k] = p.x;
+      by[k] = p.y;
+      bz[k] = p.z;
+    }
+    for (std::size_t k = m; k < padded; ++k)
+      bx[k] = by[k] = bz[k] = std::numeric_limits<float>::quiet_NaN();
+    detail::organizerKernel(c, bx, by, bz, padded, bw, bt, status, table_cell, column_code, rows);
+  }
   const bool full = full_revolution_;
 
   // Placement, in input order: the first point takes its cell, a later one a free neighbour or,
@@ -439,14 +463,18 @@ void RangeImageOrganizer<PointT>::placeBlock(std::size_t begin, std::size_t end)
     const PointT& q = in[index];
     return (q.x * q.x + q.y * q.y) + q.z * q.z;
   };
+  // Counted in locals, added to the members after the loop: a member incremented through `this`
+  // may alias the int stores below, so the compiler kept it in memory, and each point's increment
+  // waited for the previous one's store (~12 % of the organizer's time).
+  std::size_t placed = 0, shifted = 0, displaced = 0, invalid = 0, out_of_view = 0;
   for (std::size_t k = 0; k < m; ++k) {
     const int index = indices ? (*indices_)[begin + k] : int(begin + k);
     if (status[k] != 0) {
       cell_of_point[index] = -1;
       if (status[k] == 1)
-        ++invalid_;
+        ++invalid;
       else
-        ++out_of_view_;
+        ++out_of_view;
       continue;
     }
 
@@ -458,13 +486,13 @@ void RangeImageOrganizer<PointT>::placeBlock(std::size_t begin, std::size_t end)
     if (index_image[cell] < 0) {
       index_image[cell] = index;
       cell_of_point[index] = cell;
-      ++placed_;
+      ++placed;
       continue;
     }
     if (use_free_neighbour_) {
       // The side the azimuth leans to first: the nearer neighbour centre.
       const int step = (column_code[k] & 1) ? 1 : -1;
-      bool placed = false;
+      bool free_found = false;
       for (const int side : {step, -step}) {
         int c = column + side;
         if (full) {
@@ -476,18 +504,18 @@ void RangeImageOrganizer<PointT>::placeBlock(std::size_t begin, std::size_t end)
         if (index_image[base + c] < 0) {
           index_image[base + c] = index;
           cell_of_point[index] = base + c;
-          ++placed_;
-          placed = true;
+          ++placed;
+          free_found = true;
           break;
         }
       }
-      if (placed) {
-        ++shifted_;
+      if (free_found) {
+        ++shifted;
         continue;
       }
     }
     // The cell is taken: the nearer return wins, as in a single-return range image.
-    ++displaced_;
+    ++displaced;
     cell_of_point[index] = -1;  // unless it wins the cell below
     const int occupant = index_image[cell];
     if (range2Of(index) < range2Of(occupant)) {
@@ -496,6 +524,11 @@ void RangeImageOrganizer<PointT>::placeBlock(std::size_t begin, std::size_t end)
       cell_of_point[index] = cell;
     }
   }
+  placed_ += placed;
+  shifted_ += shifted;
+  displaced_ += displaced;
+  invalid_ += invalid;
+  out_of_view_ += out_of_view;
 }
 
 template <typename PointT>

@@ -1,11 +1,11 @@
 /*
  * SPDX-License-Identifier: BSD-3-Clause
  *
- * The 8-lane kernel of RangeImageOrganizer, included twice by range_image_organizer.hpp (for AVX2
- * and for AVX-512VL) with these macros set: PCL_MOVERS_ORGANIZER_KERNEL (function name),
- * PCL_MOVERS_ORGANIZER_SELECT (name of its lane-select helper), and
- * PCL_MOVERS_ORGANIZER_KERNEL_ATTRIBUTES (target and, for GCC, no fused multiply-add: the results
- * must match the scalar reference bit for bit). No include guard on purpose.
+ * The 8-lane kernel of RangeImageOrganizer, included by range_image_organizer.hpp for AVX2 (CPUs
+ * with AVX-512 run range_image_organizer_kernel16.hpp) with these macros set:
+ * PCL_MOVERS_ORGANIZER_KERNEL (function name), PCL_MOVERS_ORGANIZER_SELECT (name of its lane-select
+ * helper), and PCL_MOVERS_ORGANIZER_KERNEL_ATTRIBUTES (target and, for GCC, no fused multiply-add:
+ * the results must match the scalar reference bit for bit). No include guard on purpose.
  */
 
 /** \brief Lane-wise mask ? a : b. */
@@ -17,8 +17,6 @@ PCL_MOVERS_ORGANIZER_KERNEL_ATTRIBUTES inline __m256 PCL_MOVERS_ORGANIZER_SELECT
 
 /** \brief organizerKernel eight points at a time, for CPUs with AVX2 (chosen at run time: the
  * library is built for plain x86-64). Same operations, same order, no FMA: identical results.
- * Compiled twice: for AVX2, and for AVX-512VL, whose 32 vector registers hold all the constants
- * (AVX2 has 16 and spills them to the stack in this loop: ~7 % of the organizer's time).
  * `m` must be a multiple of 8.
  *
  * Rows: scanners deliver their points beam after beam (KITTI) or in runs of one beam, so eight
