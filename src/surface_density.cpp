@@ -42,9 +42,12 @@ class ErfTable {
   float v_[kSize];
 };
 
+// At namespace scope (built before main()): a function-local static would cost a guard check on
+// every one of the ~10^4 calls per registration.
+const ErfTable g_erf_table;
+
 inline float fastErf(float x) {
-  static const ErfTable table;
-  return table(x);
+  return g_erf_table(x);
 }
 
 /** Weights of a 1D Gaussian (mean `mean`, σ `sigma`) integrated over the cells [first, last] of an
@@ -53,11 +56,28 @@ inline float fastErf(float x) {
  * the grid, so a Gaussian inside the grid has mass exactly 1 while mass outside is lost. */
 struct AxisWeights {
   int first = 0;  // first grid cell with a weight
-  std::vector<float> w;
+  int count = 0;  // number of cells with a weight (0: the Gaussian misses the grid)
+  float* w = inline_w;
+  // Windows of up to 127 cells (σ up to ~20 cells) need no heap: the vector's resize and its
+  // zero fill cost as much as the erf evaluations.
+  float inline_w[128];
+  std::vector<float> heap_w;
+  AxisWeights() = default;
+  AxisWeights(const AxisWeights&) = delete;
+  AxisWeights& operator=(const AxisWeights&) = delete;
+  /** Room for n values in w. */
+  void reserve(int n) {
+    if (n <= 128) {
+      w = inline_w;
+    } else {
+      heap_w.resize(static_cast<std::size_t>(n));
+      w = heap_w.data();
+    }
+  }
 };
 
 void axisWeights(float mean, float sigma, float origin, float cell, int n, AxisWeights& out) {
-  out.w.clear();
+  out.count = 0;
   out.first = 0;
   const float u = (mean - origin) / cell;  // position in cells
   const float reach = 3.f * sigma / cell;
@@ -68,21 +88,27 @@ void axisWeights(float mean, float sigma, float origin, float cell, int n, AxisW
   if (!std::isfinite(lo) || !std::isfinite(hi) || hi < 0.f || lo > static_cast<float>(n - 1))
     return;
   const float inv = 1.f / (std::sqrt(2.f) * sigma);
-  // Mass of the whole window, to normalise: the per-cell weights are differences of erf, so their
-  // sum telescopes to the two window ends, and only the cells inside [0, n) need evaluating.
-  const float total = 0.5f * (fastErf(((hi + 1.f) * cell + origin - mean) * inv) -
-                              fastErf((lo * cell + origin - mean) * inv));
   const int first = static_cast<int>(std::max(lo, 0.f));
   const int last = static_cast<int>(std::min(hi, static_cast<float>(n - 1)));
   out.first = first;
-  if (last < first || !(total > 0.f)) return;
-  out.w.resize(static_cast<std::size_t>(last - first + 1));
-  float prev = fastErf((first * cell + origin - mean) * inv);
-  for (int i = first; i <= last; ++i) {
-    const float next = fastErf(((i + 1) * cell + origin - mean) * inv);
-    out.w[static_cast<std::size_t>(i - first)] = 0.5f * (next - prev) / total;
-    prev = next;
-  }
+  if (last < first) return;
+  // erf at the cell boundaries first .. last + 1, written into w (one more than the cells).
+  out.reserve(last - first + 2);
+  float* e = out.w;
+  for (int i = first; i <= last + 1; ++i)
+    e[i - first] = fastErf((static_cast<float>(i) * cell + origin - mean) * inv);
+  // Mass of the whole window, to normalise: the per-cell weights are differences of erf, so their
+  // sum telescopes to the two window ends, which are boundaries evaluated above unless the
+  // window is clipped by the grid (the same expressions: identical values).
+  const float e_lo =
+      lo == static_cast<float>(first) ? e[0] : fastErf((lo * cell + origin - mean) * inv);
+  const float e_hi = hi == static_cast<float>(last)
+                         ? e[last - first + 1]
+                         : fastErf(((hi + 1.f) * cell + origin - mean) * inv);
+  const float total = 0.5f * (e_hi - e_lo);
+  if (!(total > 0.f)) return;
+  for (int k = 0; k <= last - first; ++k) e[k] = 0.5f * (e[k + 1] - e[k]) / total;
+  out.count = last - first + 1;
 }
 
 }  // namespace
@@ -190,18 +216,18 @@ void SurfaceDensity::computeFromGaussians(const std::vector<Eigen::Vector3f>& po
     const float mass = weights.empty() ? unit_mass : unit_mass * weights[i];
     // Separable Gaussian: the 3D cell integral is the product of three 1D cell integrals.
     axisWeights(p.z(), sigmas_z[i], oz, resolution_z_, nz_, wz);
-    if (wz.w.empty()) continue;
+    if (wz.count == 0) continue;
     axisWeights(p.y(), sigmas_xy[i], oy, resolution_, ny_, wy);
-    if (wy.w.empty()) continue;
+    if (wy.count == 0) continue;
     axisWeights(p.x(), sigmas_xy[i], ox, resolution_, nx_, wx);
-    if (wx.w.empty()) continue;
-    for (std::size_t kz = 0; kz < wz.w.size(); ++kz) {
+    if (wx.count == 0) continue;
+    const float* __restrict wxw = wx.w;
+    for (int kz = 0; kz < wz.count; ++kz) {
       const float fz = mass * wz.w[kz];
-      for (std::size_t ky = 0; ky < wy.w.size(); ++ky) {
+      for (int ky = 0; ky < wy.count; ++ky) {
         const float fzy = fz * wy.w[ky];
-        float* row = &data_[index(wx.first, wy.first + static_cast<int>(ky),
-                                  wz.first + static_cast<int>(kz))];
-        for (std::size_t kx = 0; kx < wx.w.size(); ++kx) row[kx] += fzy * wx.w[kx];
+        float* __restrict row = &data_[index(wx.first, wy.first + ky, wz.first + kz)];
+        for (int kx = 0; kx < wx.count; ++kx) row[kx] += fzy * wxw[kx];
       }
     }
   }
