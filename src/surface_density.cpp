@@ -10,6 +10,10 @@
 #include <stdexcept>
 #include <string>
 
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
+
 namespace pcl_movers {
 
 namespace {
@@ -143,9 +147,30 @@ void SurfaceDensity::updateSqrt() {
   // Every change of the values ends here: a new revision for caches keyed on the content.
   revision_ = nextRevision();
   sqrt_.resize(data_.size());
-  for (std::size_t i = 0; i < data_.size(); ++i) sqrt_[i] = std::sqrt(data_[i]);
+  const std::size_t n = data_.size();
+  const float* d = data_.data();
+  float* q = sqrt_.data();
+  std::size_t i = 0;
   double mass = 0.0;
-  for (float v : data_) mass += v;
+#ifdef __SSE2__
+  // Four cells per step: sqrtps rounds exactly as std::sqrt (which the compiler keeps scalar for
+  // errno), and the mass goes to four double sums instead of one serial chain of additions
+  // (the two loops were a tenth of a registration's time).
+  __m128d m01 = _mm_setzero_pd(), m23 = _mm_setzero_pd();
+  for (; i + 4 <= n; i += 4) {
+    const __m128 v = _mm_loadu_ps(d + i);
+    _mm_storeu_ps(q + i, _mm_sqrt_ps(v));
+    m01 = _mm_add_pd(m01, _mm_cvtps_pd(v));
+    m23 = _mm_add_pd(m23, _mm_cvtps_pd(_mm_movehl_ps(v, v)));
+  }
+  double part[2];
+  _mm_storeu_pd(part, _mm_add_pd(m01, m23));
+  mass = part[0] + part[1];
+#endif
+  for (; i < n; ++i) {
+    q[i] = std::sqrt(d[i]);
+    mass += d[i];
+  }
   mass_ = static_cast<float>(mass);
 }
 

@@ -357,5 +357,8 @@ TEST(SurfaceDensity, CellWeightsMatchErfReferenceInsideClippedAndWideWindows) {
     EXPECT_LT(max_err, 2e-6) << "point " << c.point.transpose();
     EXPECT_NEAR(d.totalMass(), mass, 1e-5);
     EXPECT_GT(mass, 0.01);
+    // The square roots (taken four at a time) are the correctly rounded ones.
+    for (std::size_t i = 0; i < d.size(); ++i)
+      ASSERT_EQ(d.sqrtValues()[i], std::sqrt(d.values()[i])) << i;
   }
 }
