@@ -425,8 +425,10 @@ int fftSizeFor(const SurfaceDensity& target, const SourceLayer& src, int nr) {
 // Cost model, in nanoseconds, fitted to timings of both paths on this code (Release, one
 // thread; see docs/registration.md "Direct sum or FFT"): a multiply-add of the direct sum, and
 // one N×N real 2-D transform per unit of N² log2 N.
-constexpr double kDirectNsPerMac = 0.25;
-constexpr double kDirectNsPerCell = 3.5;
+// The direct constants were halved when the direct sum went row-wise and sixteen shifts wide
+// (measured/model time 0.55 over the calibration set; 0.5 picks the faster path most often).
+constexpr double kDirectNsPerMac = 0.125;
+constexpr double kDirectNsPerCell = 1.75;
 constexpr double kFftNsPerUnit = 0.85;
 constexpr double kFftNsPerProduct = 1.9;
 
