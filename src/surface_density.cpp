@@ -10,6 +10,10 @@
 #include <stdexcept>
 #include <string>
 
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
+
 namespace pcl_movers {
 
 namespace {
@@ -36,15 +40,36 @@ class ErfTable {
     }
     return x < 0.f ? -y : y;
   }
+#ifdef __SSE2__
+  /** operator() on four values at once, with the same float operations (bit-identical). */
+  __m128 eval4(__m128 x) const {
+    const __m128 sign = _mm_set1_ps(-0.f);
+    const __m128 ax = _mm_mul_ps(_mm_andnot_ps(sign, x), _mm_set1_ps(static_cast<float>(kPerUnit)));
+    const __m128 inside = _mm_cmplt_ps(ax, _mm_set1_ps(kMax * kPerUnit));
+    // Indices outside the table (and NaN) read entry 0; their result is replaced by 1 below.
+    const __m128i i = _mm_and_si128(_mm_cvttps_epi32(ax), _mm_castps_si128(inside));
+    alignas(16) int idx[4];
+    _mm_store_si128(reinterpret_cast<__m128i*>(idx), i);
+    const __m128 a = _mm_setr_ps(v_[idx[0]], v_[idx[1]], v_[idx[2]], v_[idx[3]]);
+    const __m128 b = _mm_setr_ps(v_[idx[0] + 1], v_[idx[1] + 1], v_[idx[2] + 1], v_[idx[3] + 1]);
+    const __m128 f = _mm_sub_ps(ax, _mm_cvtepi32_ps(i));
+    __m128 y = _mm_add_ps(a, _mm_mul_ps(f, _mm_sub_ps(b, a)));
+    y = _mm_or_ps(_mm_and_ps(inside, y), _mm_andnot_ps(inside, _mm_set1_ps(1.f)));
+    return _mm_xor_ps(y, _mm_and_ps(_mm_cmplt_ps(x, _mm_setzero_ps()), sign));
+  }
+#endif
 
  private:
   static constexpr int kSize = static_cast<int>(kMax) * kPerUnit + 2;
   float v_[kSize];
 };
 
+// At namespace scope (built before main()): a function-local static would cost a guard check on
+// every one of the ~10^4 calls per registration.
+const ErfTable g_erf_table;
+
 inline float fastErf(float x) {
-  static const ErfTable table;
-  return table(x);
+  return g_erf_table(x);
 }
 
 /** Weights of a 1D Gaussian (mean `mean`, σ `sigma`) integrated over the cells [first, last] of an
@@ -53,11 +78,28 @@ inline float fastErf(float x) {
  * the grid, so a Gaussian inside the grid has mass exactly 1 while mass outside is lost. */
 struct AxisWeights {
   int first = 0;  // first grid cell with a weight
-  std::vector<float> w;
+  int count = 0;  // number of cells with a weight (0: the Gaussian misses the grid)
+  float* w = inline_w;
+  // Windows of up to 127 cells (σ up to ~20 cells) need no heap: the vector's resize and its
+  // zero fill cost as much as the erf evaluations.
+  float inline_w[128];
+  std::vector<float> heap_w;
+  AxisWeights() = default;
+  AxisWeights(const AxisWeights&) = delete;
+  AxisWeights& operator=(const AxisWeights&) = delete;
+  /** Room for n values in w. */
+  void reserve(int n) {
+    if (n <= 128) {
+      w = inline_w;
+    } else {
+      heap_w.resize(static_cast<std::size_t>(n));
+      w = heap_w.data();
+    }
+  }
 };
 
 void axisWeights(float mean, float sigma, float origin, float cell, int n, AxisWeights& out) {
-  out.w.clear();
+  out.count = 0;
   out.first = 0;
   const float u = (mean - origin) / cell;  // position in cells
   const float reach = 3.f * sigma / cell;
@@ -68,21 +110,41 @@ void axisWeights(float mean, float sigma, float origin, float cell, int n, AxisW
   if (!std::isfinite(lo) || !std::isfinite(hi) || hi < 0.f || lo > static_cast<float>(n - 1))
     return;
   const float inv = 1.f / (std::sqrt(2.f) * sigma);
-  // Mass of the whole window, to normalise: the per-cell weights are differences of erf, so their
-  // sum telescopes to the two window ends, and only the cells inside [0, n) need evaluating.
-  const float total = 0.5f * (fastErf(((hi + 1.f) * cell + origin - mean) * inv) -
-                              fastErf((lo * cell + origin - mean) * inv));
   const int first = static_cast<int>(std::max(lo, 0.f));
   const int last = static_cast<int>(std::min(hi, static_cast<float>(n - 1)));
   out.first = first;
-  if (last < first || !(total > 0.f)) return;
-  out.w.resize(static_cast<std::size_t>(last - first + 1));
-  float prev = fastErf((first * cell + origin - mean) * inv);
-  for (int i = first; i <= last; ++i) {
-    const float next = fastErf(((i + 1) * cell + origin - mean) * inv);
-    out.w[static_cast<std::size_t>(i - first)] = 0.5f * (next - prev) / total;
-    prev = next;
+  if (last < first) return;
+  // erf at the cell boundaries first .. last + 1, written into w (one more than the cells).
+  const int count = last - first + 2;
+  out.reserve(count + 3);  // the four-wide loop may write up to three values past the end
+  float* e = out.w;
+  int k = 0;
+#ifdef __SSE2__
+  {
+    const __m128 vc = _mm_set1_ps(cell), vo = _mm_set1_ps(origin), vm = _mm_set1_ps(mean),
+                 vi = _mm_set1_ps(inv);
+    for (; k < count; k += 4) {
+      const __m128 fi =
+          _mm_cvtepi32_ps(_mm_add_epi32(_mm_set1_epi32(first + k), _mm_setr_epi32(0, 1, 2, 3)));
+      const __m128 x = _mm_mul_ps(_mm_sub_ps(_mm_add_ps(_mm_mul_ps(fi, vc), vo), vm), vi);
+      _mm_storeu_ps(e + k, g_erf_table.eval4(x));
+    }
   }
+#endif
+  for (; k < count; ++k)
+    e[k] = fastErf((static_cast<float>(first + k) * cell + origin - mean) * inv);
+  // Mass of the whole window, to normalise: the per-cell weights are differences of erf, so their
+  // sum telescopes to the two window ends, which are boundaries evaluated above unless the
+  // window is clipped by the grid (the same expressions: identical values).
+  const float e_lo =
+      lo == static_cast<float>(first) ? e[0] : fastErf((lo * cell + origin - mean) * inv);
+  const float e_hi = hi == static_cast<float>(last)
+                         ? e[last - first + 1]
+                         : fastErf(((hi + 1.f) * cell + origin - mean) * inv);
+  const float total = 0.5f * (e_hi - e_lo);
+  if (!(total > 0.f)) return;
+  for (int k = 0; k <= last - first; ++k) e[k] = 0.5f * (e[k + 1] - e[k]) / total;
+  out.count = last - first + 1;
 }
 
 }  // namespace
@@ -117,9 +179,30 @@ void SurfaceDensity::updateSqrt() {
   // Every change of the values ends here: a new revision for caches keyed on the content.
   revision_ = nextRevision();
   sqrt_.resize(data_.size());
-  for (std::size_t i = 0; i < data_.size(); ++i) sqrt_[i] = std::sqrt(data_[i]);
+  const std::size_t n = data_.size();
+  const float* d = data_.data();
+  float* q = sqrt_.data();
+  std::size_t i = 0;
   double mass = 0.0;
-  for (float v : data_) mass += v;
+#ifdef __SSE2__
+  // Four cells per step: sqrtps rounds exactly as std::sqrt (which the compiler keeps scalar for
+  // errno), and the mass goes to four double sums instead of one serial chain of additions
+  // (the two loops were a tenth of a registration's time).
+  __m128d m01 = _mm_setzero_pd(), m23 = _mm_setzero_pd();
+  for (; i + 4 <= n; i += 4) {
+    const __m128 v = _mm_loadu_ps(d + i);
+    _mm_storeu_ps(q + i, _mm_sqrt_ps(v));
+    m01 = _mm_add_pd(m01, _mm_cvtps_pd(v));
+    m23 = _mm_add_pd(m23, _mm_cvtps_pd(_mm_movehl_ps(v, v)));
+  }
+  double part[2];
+  _mm_storeu_pd(part, _mm_add_pd(m01, m23));
+  mass = part[0] + part[1];
+#endif
+  for (; i < n; ++i) {
+    q[i] = std::sqrt(d[i]);
+    mass += d[i];
+  }
   mass_ = static_cast<float>(mass);
 }
 
@@ -190,18 +273,18 @@ void SurfaceDensity::computeFromGaussians(const std::vector<Eigen::Vector3f>& po
     const float mass = weights.empty() ? unit_mass : unit_mass * weights[i];
     // Separable Gaussian: the 3D cell integral is the product of three 1D cell integrals.
     axisWeights(p.z(), sigmas_z[i], oz, resolution_z_, nz_, wz);
-    if (wz.w.empty()) continue;
+    if (wz.count == 0) continue;
     axisWeights(p.y(), sigmas_xy[i], oy, resolution_, ny_, wy);
-    if (wy.w.empty()) continue;
+    if (wy.count == 0) continue;
     axisWeights(p.x(), sigmas_xy[i], ox, resolution_, nx_, wx);
-    if (wx.w.empty()) continue;
-    for (std::size_t kz = 0; kz < wz.w.size(); ++kz) {
+    if (wx.count == 0) continue;
+    const float* __restrict wxw = wx.w;
+    for (int kz = 0; kz < wz.count; ++kz) {
       const float fz = mass * wz.w[kz];
-      for (std::size_t ky = 0; ky < wy.w.size(); ++ky) {
+      for (int ky = 0; ky < wy.count; ++ky) {
         const float fzy = fz * wy.w[ky];
-        float* row = &data_[index(wx.first, wy.first + static_cast<int>(ky),
-                                  wz.first + static_cast<int>(kz))];
-        for (std::size_t kx = 0; kx < wx.w.size(); ++kx) row[kx] += fzy * wx.w[kx];
+        float* __restrict row = &data_[index(wx.first, wy.first + ky, wz.first + kz)];
+        for (int kx = 0; kx < wx.count; ++kx) row[kx] += fzy * wxw[kx];
       }
     }
   }

@@ -736,3 +736,59 @@ TEST(BhattacharyaRegistration, MergedPointsGiveThePeakAndBOfTheUnmergedOnes) {
         << "case " << i;
   }
 }
+
+TEST(BhattacharyaRegistration, DirectCorrelationMatchesCellByCellSum) {
+  // detail::correlateDirect() (row-wise, zero-padded target, four shifts at a time) against the
+  // definition B(d) = Σ_j sqrt(S[j])·sqrt(T[j + o + d]) summed cell by cell, on layers that
+  // reach past every side of the target and on windows of widths 1..9 (remainders of the
+  // four-wide loop), with and without z shifts. Same summation order: equal to float rounding.
+  const auto pairs = pcl_movers::eval::makeSimulatedPairs(4, 41);
+  for (const auto& p : pairs) {
+    pcl_movers::SurfaceDensity target(29, 29, 3, 0.2f, 0.93f);
+    Eigen::Vector4f c;
+    pcl::compute3DCentroid(*p.target, c);
+    target.compute(*p.target, p.target->sensor_origin_.head<3>(), c.head<3>());
+    std::vector<Eigen::Vector3f> pts;
+    std::vector<float> sig;
+    for (const auto& q : p.source->points) {
+      // Moved by 1.1 m so that the layer sticks out of the target grid.
+      pts.emplace_back(q.x + 1.1f, q.y - 0.7f, q.z);
+      sig.push_back(target.sigmaAtRange(pts.back().norm()));
+    }
+    for (const int nrz : {0, 1}) {
+      pcl_movers::detail::SourceLayer layer;
+      const int nr = 9;
+      pcl_movers::detail::buildSourceLayer(layer, pts, sig, target, nr, nrz);
+      ASSERT_FALSE(layer.nonzero.empty());
+      const auto& s = layer.density;
+      auto reference = [&](int dx, int dy, int dz) {
+        float sum = 0.f;
+        for (const int j : layer.nonzero) {
+          const int jx = j % s.getNx(), jy = (j / s.getNx()) % s.getNy(),
+                    jz = j / (s.getNx() * s.getNy());
+          const int tx = jx + layer.ox + dx, ty = jy + layer.oy + dy, tz = jz + layer.oz + dz;
+          if (tx < 0 || ty < 0 || tz < 0 || tx >= 29 || ty >= 29 || tz >= 3) continue;
+          sum += s.sqrtValues()[static_cast<std::size_t>(j)] * target.sqrtAt(tx, ty, tz);
+        }
+        return sum;
+      };
+      for (const int width : {1, 3, 4, 5, 9, 2 * nr + 1}) {
+        const int dx0 = width == 2 * nr + 1 ? -nr : -nr + width / 2, dx1 = dx0 + width - 1;
+        const int dy0 = -3, dy1 = 2;
+        std::vector<float> out(static_cast<std::size_t>(width) * 6 * (2 * nrz + 1), -1.f);
+        pcl_movers::detail::correlateDirect(target, layer, dx0, dx1, dy0, dy1, -nrz, nrz,
+                                            out.data());
+        float peak = 0.f;
+        for (int dz = -nrz; dz <= nrz; ++dz)
+          for (int dy = dy0; dy <= dy1; ++dy)
+            for (int dx = dx0; dx <= dx1; ++dx) {
+              const float got =
+                  out[(static_cast<std::size_t>(dz + nrz) * 6 + (dy - dy0)) * width + (dx - dx0)];
+              EXPECT_NEAR(got, reference(dx, dy, dz), 1e-6f) << dx << " " << dy << " " << dz;
+              peak = std::max(peak, got);
+            }
+        if (width == 2 * nr + 1) EXPECT_GT(peak, 0.2f);  // the window holds the overlap
+      }
+    }
+  }
+}

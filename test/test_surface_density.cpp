@@ -312,3 +312,53 @@ TEST(SurfaceDensity, MassAndSquareRootsFollowEveryChange) {
   d.setGridSize(5, 5, 5);
   EXPECT_TRUE(d.empty());
 }
+
+TEST(SurfaceDensity, CellWeightsMatchErfReferenceInsideClippedAndWideWindows) {
+  // The cell weights of one Gaussian are products of 1D cell integrals renormalised over the
+  // ±3σ window (before clipping to the grid). Checked against std::erf in double for a Gaussian
+  // inside the grid, windows clipped at the low and the high end, and a window wider than 128
+  // cells (the per-axis weights then live on the heap).
+  auto reference = [](double mean, double sigma, double origin, double cell, int n, int i) {
+    const double u = (mean - origin) / cell, reach = 3.0 * sigma / cell;
+    const double lo = std::floor(u - reach), hi = std::floor(u + reach);
+    if (i < lo || i > hi || i < 0 || i >= n) return 0.0;
+    const double s = std::sqrt(2.0) * sigma;
+    const double total =
+        std::erf(((hi + 1) * cell + origin - mean) / s) - std::erf((lo * cell + origin - mean) / s);
+    return (std::erf(((i + 1) * cell + origin - mean) / s) -
+            std::erf((i * cell + origin - mean) / s)) /
+           total;
+  };
+  struct Case {
+    int nx, ny, nz;
+    float res, res_z, sigma_xy, sigma_z;
+    Eigen::Vector3f point;
+  };
+  const Case cases[] = {
+      {29, 29, 7, 0.2f, 0.4f, 0.13f, 0.21f, Eigen::Vector3f(0.037f, -0.061f, 0.11f)},  // inside
+      {29, 29, 7, 0.2f, 0.4f, 0.13f, 0.21f, Eigen::Vector3f(-2.85f, 2.83f, -1.35f)},   // clipped
+      {29, 29, 7, 0.2f, 0.4f, 0.3f, 0.5f, Eigen::Vector3f(2.87f, -2.93f, 1.37f)},      // clipped
+      {300, 3, 1, 0.1f, 0.4f, 2.5f, 0.3f, Eigen::Vector3f(0.31f, 0.f, 0.f)},           // wide
+  };
+  for (const Case& c : cases) {
+    SurfaceDensity d(c.nx, c.ny, c.nz, c.res, c.res_z);
+    d.computeFromGaussians({c.point}, {c.sigma_xy}, {c.sigma_z}, {}, Eigen::Vector3f::Zero());
+    const double ox = -0.5 * c.nx * c.res, oy = -0.5 * c.ny * c.res, oz = -0.5 * c.nz * c.res_z;
+    double max_err = 0.0, mass = 0.0;
+    for (int iz = 0; iz < c.nz; ++iz)
+      for (int iy = 0; iy < c.ny; ++iy)
+        for (int ix = 0; ix < c.nx; ++ix) {
+          const double ref = reference(c.point.x(), c.sigma_xy, ox, c.res, c.nx, ix) *
+                             reference(c.point.y(), c.sigma_xy, oy, c.res, c.ny, iy) *
+                             reference(c.point.z(), c.sigma_z, oz, c.res_z, c.nz, iz);
+          max_err = std::max(max_err, std::abs(d.at(ix, iy, iz) - ref));
+          mass += ref;
+        }
+    EXPECT_LT(max_err, 2e-6) << "point " << c.point.transpose();
+    EXPECT_NEAR(d.totalMass(), mass, 1e-5);
+    EXPECT_GT(mass, 0.01);
+    // The square roots (taken four at a time) are the correctly rounded ones.
+    for (std::size_t i = 0; i < d.size(); ++i)
+      ASSERT_EQ(d.sqrtValues()[i], std::sqrt(d.values()[i])) << i;
+  }
+}

@@ -33,6 +33,11 @@ struct SourceLayer {
   SurfaceDensity density{1, 1, 1, 0.2f, 0.4f};
   int ox = 0, oy = 0, oz = 0;  ///< target-lattice index of the tight grid's cell (0, 0, 0)
   std::vector<int> nonzero;    ///< indices of the cells with sqrt(ρ) > 0
+  /** The non-zero cells again, per source row (y, z) in index order, for correlateDirect():
+   * row r holds cells row_begin[r] .. row_begin[r + 1] - 1 of cell_x / cell_v (x index and
+   * sqrt(ρ)); rows without mass are left out. */
+  std::vector<int> row_y, row_z, row_begin, cell_x;
+  std::vector<float> cell_v;
 };
 
 /** \brief Where the returns of occluders hide what lies behind them, seen from one sensor: the
