@@ -407,18 +407,26 @@ TEST(MoverTracker, CoastingStaticTrackSkipsClaimedClustersAndIsReacquired) {
 
 TEST(MoverTracker, FitVelocityUsesScatterOfPositions) {
   std::deque<Eigen::Vector3d> history;
-  Eigen::Vector2d v;
-  double sigma_v = 0;
   history.emplace_back(0, 0, 0);
   history.emplace_back(0.14, 0, 0.1);
-  EXPECT_FALSE(Tracker::fitVelocity(history, 0.1, v, sigma_v));  // no scatter from 2 points
+  const auto two = Tracker::fitVelocity(history, 0.1);
+  EXPECT_FALSE(two.valid);  // no scatter from 2 points
+  EXPECT_TRUE(std::isinf(two.sigma_v));
   // Walking at 1.4 m/s, positions exact: σ is the floor (0.1 m) over sqrt(Σ(t - t̄)²).
   for (int k = 2; k < 6; ++k) history.emplace_back(0.14 * k, 0, 0.1 * k);
-  ASSERT_TRUE(Tracker::fitVelocity(history, 0.1, v, sigma_v));
-  EXPECT_NEAR(v.x(), 1.4, 1e-9);
-  EXPECT_NEAR(v.y(), 0.0, 1e-9);
-  EXPECT_NEAR(sigma_v, 0.1 / std::sqrt(0.175), 1e-9);
-  EXPECT_GT(v.norm(), 2.0 * sigma_v);
+  const auto fit = Tracker::fitVelocity(history, 0.1);
+  ASSERT_TRUE(fit.valid);
+  EXPECT_NEAR(fit.velocity.x(), 1.4, 1e-9);
+  EXPECT_NEAR(fit.velocity.y(), 0.0, 1e-9);
+  EXPECT_NEAR(fit.sigma, 0.1, 1e-12);
+  EXPECT_NEAR(fit.sigma_v, 0.1 / std::sqrt(0.175), 1e-9);
+  EXPECT_GT(fit.velocity.norm(), 2.0 * fit.sigma_v);
+  // The line's centre and spread (what velocity_fit_init restarts the filter from).
+  EXPECT_EQ(fit.positions, 6u);
+  EXPECT_NEAR(fit.mean_time, 0.25, 1e-12);
+  EXPECT_NEAR(fit.mean_position.x(), 0.35, 1e-12);
+  EXPECT_NEAR(fit.mean_position.y(), 0.0, 1e-12);
+  EXPECT_NEAR(fit.time_spread, 0.175, 1e-12);
   // A static object whose registered positions scatter by a few tenths of a metre (a far,
   // coarsely sampled object): the line through them is faster than mover_speed, but the
   // scatter about it makes it no evidence of motion.
@@ -426,9 +434,11 @@ TEST(MoverTracker, FitVelocityUsesScatterOfPositions) {
   const double xs[6] = {0.2, -0.2, 0.1, -0.25, 0.15, -0.1};
   const double ys[6] = {-0.5, 0.4, -0.4, 0.6, -0.1, 0.6};
   for (int k = 0; k < 6; ++k) noisy.emplace_back(xs[k], ys[k], 0.1 * k);
-  ASSERT_TRUE(Tracker::fitVelocity(noisy, 0.1, v, sigma_v));
-  EXPECT_GT(v.norm(), 1.2);
-  EXPECT_LT(v.norm(), 2.0 * sigma_v);
+  const auto scattered = Tracker::fitVelocity(noisy, 0.1);
+  ASSERT_TRUE(scattered.valid);
+  EXPECT_GT(scattered.sigma, 0.1);  // the scatter, above the floor
+  EXPECT_GT(scattered.velocity.norm(), 1.2);
+  EXPECT_LT(scattered.velocity.norm(), 2.0 * scattered.sigma_v);
 }
 
 // A pedestrian walking across at 50 m, registered to a few cm: the Kalman velocity's σ, built

@@ -15,6 +15,7 @@
 
 #include <Eigen/Geometry>
 #include <deque>
+#include <limits>
 #include <vector>
 
 namespace pcl_movers {
@@ -166,11 +167,24 @@ class MoverTracker {
   /** \brief Total number of tracks ever started. */
   int getTracksStarted() const { return next_id_; }
 
-  /** \brief Least-squares line through measured positions (x, y, time): its velocity and the
-   * velocity's σ (per axis) from the scatter of the positions about the line, at least
-   * `min_sigma`. False (σ infinite) with fewer than 3 positions or no time span. */
-  static bool fitVelocity(const std::deque<Eigen::Vector3d>& history, double min_sigma,
-                          Eigen::Vector2d& velocity, double& sigma_v);
+  /** \brief Least-squares line through measured positions (x, y, time), see fitVelocity(). */
+  struct LineFit {
+    bool valid = false;  ///< false with fewer than 3 positions or no time span
+    Eigen::Vector2d velocity = Eigen::Vector2d::Zero();  ///< slope of the line [m/s]
+    /// σ of the velocity per axis: `sigma` / sqrt(`time_spread`); infinite when not valid.
+    double sigma_v = std::numeric_limits<double>::infinity();
+    /// σ of one position about the line per axis (the scatter, at least the floor) [m].
+    double sigma = std::numeric_limits<double>::infinity();
+    Eigen::Vector2d mean_position = Eigen::Vector2d::Zero();  ///< centre of the line
+    double mean_time = 0;                                     ///< time of mean_position [s]
+    double time_spread = 0;                                   ///< Σ (t - mean_time)² [s²]
+    std::size_t positions = 0;
+  };
+
+  /** \brief Least-squares line through measured positions (x, y, time): its velocity, the
+   * velocity's σ (per axis) from the scatter of the positions about the line (at least
+   * `min_sigma`), and the means and spread a caller needs to restart a filter from the line. */
+  static LineFit fitVelocity(const std::deque<Eigen::Vector3d>& history, double min_sigma);
 
   /** \brief Forgets all tracks. */
   void reset();

@@ -179,12 +179,12 @@ void MoverTracker<PointT>::buildView(const Candidate& candidate, const Eigen::Ma
 }
 
 template <typename PointT>
-bool MoverTracker<PointT>::fitVelocity(const std::deque<Eigen::Vector3d>& history, double min_sigma,
-                                       Eigen::Vector2d& velocity, double& sigma_v) {
-  velocity.setZero();
-  sigma_v = std::numeric_limits<double>::infinity();
+typename MoverTracker<PointT>::LineFit MoverTracker<PointT>::fitVelocity(
+    const std::deque<Eigen::Vector3d>& history, double min_sigma) {
+  LineFit fit;
   const std::size_t n = history.size();
-  if (n < 3) return false;  // a line through two points has no scatter to judge it by
+  fit.positions = n;
+  if (n < 3) return fit;  // a line through two points has no scatter to judge it by
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   for (const auto& h : history) mean += h;
   mean /= static_cast<double>(n);
@@ -195,8 +195,11 @@ bool MoverTracker<PointT>::fitVelocity(const std::deque<Eigen::Vector3d>& histor
     stt += dt * dt;
     sxt += dt * (h.template head<2>() - mean.template head<2>());
   }
-  if (!(stt > 0)) return false;
-  velocity = sxt / stt;
+  fit.mean_position = mean.template head<2>();
+  fit.mean_time = mean.z();
+  fit.time_spread = stt;
+  if (!(stt > 0)) return fit;
+  const Eigen::Vector2d velocity = sxt / stt;
   double ss = 0;
   for (const auto& h : history) {
     const Eigen::Vector2d r =
@@ -204,9 +207,11 @@ bool MoverTracker<PointT>::fitVelocity(const std::deque<Eigen::Vector3d>& histor
     ss += r.squaredNorm();
   }
   // Per-axis σ of the positions about the line: 2 (n - 2) degrees of freedom over x and y.
-  const double sigma = std::max(min_sigma, std::sqrt(ss / (2.0 * static_cast<double>(n - 2))));
-  sigma_v = sigma / std::sqrt(stt);
-  return true;
+  fit.sigma = std::max(min_sigma, std::sqrt(ss / (2.0 * static_cast<double>(n - 2))));
+  fit.sigma_v = fit.sigma / std::sqrt(stt);
+  fit.velocity = velocity;
+  fit.valid = true;
+  return fit;
 }
 
 template <typename PointT>
@@ -523,27 +528,19 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
       // anchored on the birth position (a car at 80 m took 10+ frames). At the third
       // registration the filter restarts from the least-squares line through the three
       // positions, with that line's covariance (σ as in the updates, or the scatter if larger).
-      Eigen::Vector2d v;
-      double sigma_v = 0;
-      if (fitVelocity(t.history, meas_sigma, v, sigma_v)) {
-        double t_mean = 0;
-        for (const auto& h : t.history) t_mean += h.z();
-        t_mean /= static_cast<double>(t.history.size());
-        double stt = 0;
-        Eigen::Vector2d x_mean = Eigen::Vector2d::Zero();
-        for (const auto& h : t.history) {
-          stt += (h.z() - t_mean) * (h.z() - t_mean);
-          x_mean += h.template head<2>();
-        }
-        x_mean /= static_cast<double>(t.history.size());
-        const double s2 = sigma_v * sigma_v * stt;  // σ² of one position
+      const LineFit fit = fitVelocity(t.history, meas_sigma);
+      if (fit.valid) {
+        const double t_mean = fit.mean_time, stt = fit.time_spread;
+        const Eigen::Vector2d& x_mean = fit.mean_position;
+        const Eigen::Vector2d& v = fit.velocity;
+        const double s2 = fit.sigma_v * fit.sigma_v * stt;  // σ² of one position
         const double dt_now = time - t_mean;
         KalmanFilterCV::State state;
         state.template head<2>() = x_mean + v * dt_now;
         state.template tail<2>() = v;
         KalmanFilterCV::Covariance cov = KalmanFilterCV::Covariance::Zero();
         const double var_p =
-            s2 * (1.0 / static_cast<double>(t.history.size()) + dt_now * dt_now / stt);
+            s2 * (1.0 / static_cast<double>(fit.positions) + dt_now * dt_now / stt);
         const double var_v = s2 / stt, cov_pv = s2 * dt_now / stt;
         for (int a = 0; a < 2; ++a) {
           cov(a, a) = var_p;
@@ -565,11 +562,10 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
       // Kalman test: with their 0.3 m σ floor a 6-position line cannot tell a walker (σ_v 0.7
       // m/s), where the filter's longer memory can (centroid-mode walkers were lost).
       const double floor = p.registration_sigma;
-      Eigen::Vector2d v;
-      double sigma_v = 0;
-      const bool fitted = fitVelocity(t.history, floor, v, sigma_v);
-      const double speed = v.norm();
-      t.fast.push_back(fitted && speed > p.mover_speed && speed > p.mover_speed_sigmas * sigma_v);
+      const LineFit fit = fitVelocity(t.history, floor);
+      const double speed = fit.velocity.norm();
+      t.fast.push_back(fit.valid && speed > p.mover_speed &&
+                       speed > p.mover_speed_sigmas * fit.sigma_v);
     } else {
       // Fast only when the speed is above the threshold and well above its own uncertainty.
       const Eigen::Vector2d v = t.filter.velocity();
