@@ -374,6 +374,51 @@ TEST(MoverTracker, StaticTrackThatStartsMovingIsFollowed) {
   }
 }
 
+// static_clearance: a person standing between two posts 1.5 m away (parked cars in a row,
+// bushes) used to be registered every frame, since any cluster within 2 m counted as ambiguous.
+// With the posts beyond static_clearance (1 m) the still tracks are registered only every
+// static_refresh_frames, and the person who then walks off is followed and confirmed exactly as
+// before; posts 0.6 m away (within the clearance) still make every track register.
+TEST(MoverTracker, StillTrackWithNeighboursBeyondClearanceIsNotRegistered) {
+  std::map<std::pair<double, double>, int> registrations_still, mover_frames;
+  const auto at = [](double spacing, double clearance) {
+    return std::make_pair(spacing, clearance);
+  };
+  for (const double spacing : {1.5, 0.6})
+    for (const double clearance : {1.0, 2.0}) {
+      auto params = defaults();
+      params.static_clearance = clearance;
+      Tracker tracker;
+      tracker.setParameters(params);
+      const Eigen::Vector3d sensor(0, 0, 1.7);
+      std::set<int> ids;
+      const auto key = at(spacing, clearance);
+      for (int k = 0; k < 60; ++k) {
+        const double t = 0.1 * k;
+        const double walked = k < 30 ? 0.0 : 1.5 * (t - 3.0);
+        SceneBuilder scene;
+        scene.addBox(sensor, Eigen::Vector2d(12 + walked, 0), 0.0, 0.4, 0.4, 1.8);
+        scene.addBox(sensor, Eigen::Vector2d(12, spacing), 0.0, 0.2, 0.2, 1.5);
+        scene.addBox(sensor, Eigen::Vector2d(12, -spacing), 0.0, 0.2, 0.2, 1.5);
+        const auto results = step(tracker, scene, sensor, t);
+        ASSERT_EQ(results.size(), 3u);
+        if (k >= 10 && k < 30) registrations_still[key] += tracker.getRegistrationCount();
+        if (k >= 29) ids.insert(results[0].track_id);
+        if (k >= 45) mover_frames[key] += results[0].mover;
+        EXPECT_FALSE(results[1].mover || results[2].mover);
+      }
+      EXPECT_EQ(ids.size(), 1u) << spacing << " " << clearance;
+    }
+  // 1.5 m: three still tracks over 20 frames, registered every 4th frame (and a few more).
+  EXPECT_GE(registrations_still[at(1.5, 2.0)], 60);
+  EXPECT_LT(registrations_still[at(1.5, 1.0)], 30);
+  // 0.6 m: ambiguous neighbours, registered every frame whatever the clearance.
+  EXPECT_GE(registrations_still[at(0.6, 1.0)], 60);
+  EXPECT_EQ(registrations_still[at(0.6, 1.0)], registrations_still[at(0.6, 2.0)]);
+  for (const auto& m : mover_frames)
+    EXPECT_EQ(m.second, 15) << m.first.first << " " << m.first.second;
+}
+
 // Claimed clusters: while a post is hidden, its coasting track does not register the neighbouring
 // post a live track matched well, and it still re-acquires its own post when that reappears.
 TEST(MoverTracker, CoastingStaticTrackSkipsClaimedClustersAndIsReacquired) {

@@ -315,9 +315,10 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     results_[c].features = cand.features;
   }
 
-  // Cheap frames for established static tracks (see static_refresh_frames): the track's single
-  // gated candidate has a centroid that moved as little as the (near zero) prediction says.
-  std::vector<char> cheap(tracks_.size(), 0);
+  // Cheap frames for established static tracks (see static_refresh_frames): the track's nearest
+  // usable cluster has a centroid that moved as little as the (near zero) prediction says, and no
+  // other cluster is within static_clearance. cheap[ti] is that cluster (-1: register as usual).
+  std::vector<int> cheap(tracks_.size(), -1);
   if (use_registration && p.static_refresh_frames > 1) {
     for (std::size_t ti = 0; ti < tracks_.size(); ++ti) {
       const Track& track = tracks_[ti];
@@ -325,18 +326,37 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
           track.filter.speed() > 0.5 * p.mover_speed ||
           track.since_registration + 1 >= p.static_refresh_frames)
         continue;
-      int in_gate = 0;
-      bool still = false;
-      for (const auto& cand : candidates) {
+      double nearest = std::numeric_limits<double>::max(), second = nearest;
+      int nearest_cluster = -1;
+      for (std::size_t c = 0; c < candidates.size(); ++c) {
+        const auto& cand = candidates[c];
         if (!cand.usable) continue;
         const double d =
             (cand.features.centroid - track.features.centroid).template head<2>().norm();
-        // Another cluster this close would make the association ambiguous: register then.
-        if (d > 2 * p.gate_margin) continue;
-        ++in_gate;
-        still = d < p.static_shift;
+        if (d < nearest) {
+          second = nearest;
+          nearest = d;
+          nearest_cluster = static_cast<int>(c);
+        } else if (d < second) {
+          second = d;
+        }
       }
-      cheap[ti] = in_gate == 1 && still;
+      if (nearest_cluster < 0 || !(nearest < p.static_shift)) continue;
+      // Another cluster this close would make the association ambiguous: register then.
+      if (second <= p.static_clearance) continue;
+      if (second <= 2 * p.gate_margin) {
+        // A neighbour within the old two-gate-margin bound (it was always registered then): the
+        // cluster must also have kept its size, so a split or merge with that neighbour (which
+        // moves the centroid little when the other part is small) is registered.
+        const auto& f = candidates[nearest_cluster].features;
+        const double points_ratio =
+            static_cast<double>(f.points) / std::max(1, track.features.points);
+        if (points_ratio < 0.8 || points_ratio > 1.25 ||
+            std::abs(f.height - track.features.height) > 0.3 ||
+            std::abs(f.length - track.features.length) > 0.3)
+          continue;
+      }
+      cheap[ti] = nearest_cluster;
     }
   }
 
@@ -402,8 +422,10 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
       Match m;
       m.track = ti;
       m.cluster = c;
-      if (!centroid_only && cheap[ti]) {
-        // Established static track whose only candidate did not move: seen, no registration.
+      if (!centroid_only && cheap[ti] >= 0) {
+        // Established static track whose nearest cluster did not move: seen, no registration;
+        // its other gated clusters are left to the other tracks.
+        if (static_cast<int>(c) != cheap[ti]) continue;
         m.cheap = true;
         m.measurement = Eigen::Vector3d(predicted.x(), predicted.y(), track.z);
         m.score = track.similarity;
