@@ -234,15 +234,21 @@ TEST(MoverDetector, StageObjectsReusedAcrossFrames) {
       EXPECT_EQ(clusters[c].indices, fresh_clusters[c].indices) << "frame " << i;
     EXPECT_EQ(result.clusters, static_cast<int>(clusters.size()));
     if (i >= copy_at) {
-      // The copy organizes and segments with its own stage objects, exactly as the original.
-      // (Its tracker is not compared: MoverTracker copies share their tracks' SurfaceDensity
-      // models, so a copy and its original must not both keep tracking.)
+      // The copy organizes and segments with its own stage objects and continues the sequence
+      // exactly as the original (own tracker models: same tracks, same rows).
       copy.process(scan, reader.pose(i), reader.time(i), static_cast<int>(i), copy_result);
       ASSERT_EQ(result.organized->size(), copy_result.organized->size());
       for (std::size_t k = 0; k < result.organized->size(); ++k)
         ASSERT_TRUE(same_xyz((*result.organized)[k], (*copy_result.organized)[k])) << i;
-      EXPECT_EQ(copy_result.clusters, result.clusters) << "frame " << i;
       EXPECT_EQ(*copy.removeGround(result.organized), *objects) << "frame " << i;
+      ASSERT_EQ(result.rows.size(), copy_result.rows.size()) << "frame " << i;
+      for (std::size_t r = 0; r < result.rows.size(); ++r) {
+        EXPECT_EQ(result.rows[r].track_id, copy_result.rows[r].track_id);
+        EXPECT_EQ(result.rows[r].mover, copy_result.rows[r].mover);
+        EXPECT_DOUBLE_EQ(result.rows[r].vx, copy_result.rows[r].vx);
+        EXPECT_DOUBLE_EQ(result.rows[r].similarity, copy_result.rows[r].similarity);
+        EXPECT_EQ(result.cluster_indices[r].indices, copy_result.cluster_indices[r].indices);
+      }
     }
   }
 }

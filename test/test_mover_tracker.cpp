@@ -540,3 +540,39 @@ TEST(MoverTracker, YoungTrackVelocityFromLineFit) {
   EXPECT_LT(error[1], 1.5);
   EXPECT_GT(error[0], 2.0);
 }
+
+// A copied tracker owns its models: feeding the copy other frames must not change what the
+// original computes (they shared the SurfaceDensity models before, so the copy's views were
+// accumulated into the original's models).
+TEST(MoverTracker, CopyOwnsItsModels) {
+  const Eigen::Vector3d sensor(0, 0, 1.7);
+  const auto frame = [&](double x) {
+    SceneBuilder scene;
+    scene.addBox(sensor, Eigen::Vector2d(x, 0), 0.3, 4.2, 1.8, 1.5);
+    return scene;
+  };
+  Tracker original, reference;
+  original.setParameters(defaults());
+  reference.setParameters(defaults());
+  for (int k = 0; k < 5; ++k) {
+    auto scene = frame(15 + 0.8 * k);
+    step(original, scene, sensor, 0.1 * k);
+    step(reference, scene, sensor, 0.1 * k);
+  }
+  Tracker copy(original);
+  for (int k = 5; k < 12; ++k) {
+    auto other = frame(15 + 0.8 * 4 - 0.4 * (k - 4));  // the copy sees the car reversing
+    step(copy, other, sensor, 0.1 * k);
+    auto scene = frame(15 + 0.8 * k);
+    const auto a = step(original, scene, sensor, 0.1 * k);
+    const auto b = step(reference, scene, sensor, 0.1 * k);
+    ASSERT_EQ(a.size(), b.size());
+    for (std::size_t c = 0; c < a.size(); ++c) {
+      EXPECT_EQ(a[c].track_id, b[c].track_id) << k;
+      EXPECT_DOUBLE_EQ(a[c].similarity, b[c].similarity) << k;
+      EXPECT_DOUBLE_EQ(a[c].velocity.x(), b[c].velocity.x()) << k;
+    }
+  }
+  ASSERT_EQ(copy.getTracks().size(), original.getTracks().size());
+  EXPECT_NE(copy.getTracks()[0].model, original.getTracks()[0].model);
+}

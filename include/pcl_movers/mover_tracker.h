@@ -138,6 +138,14 @@ class MoverTracker {
   };
 
   MoverTracker() = default;
+  /** \brief A copy owns copies of the tracks' models, so that the copy and the original can both
+   * keep tracking (sharing them, each would accumulate its views into the other's models). Work
+   * buffers are not copied. */
+  MoverTracker(const MoverTracker& other);
+  MoverTracker& operator=(const MoverTracker& other);
+  MoverTracker(MoverTracker&&) = default;
+  MoverTracker& operator=(MoverTracker&&) = default;
+  ~MoverTracker() = default;
 
   /** \brief Uses the tracker and registration entries of `parameters` (validated by the caller). */
   void setParameters(const DetectorParameters& parameters) { parameters_ = parameters; }

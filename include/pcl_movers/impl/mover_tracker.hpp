@@ -63,6 +63,28 @@ typename MoverTracker<PointT>::ClusterFeatures MoverTracker<PointT>::computeFeat
 }
 
 template <typename PointT>
+MoverTracker<PointT>::MoverTracker(const MoverTracker& other) {
+  *this = other;
+}
+
+template <typename PointT>
+MoverTracker<PointT>& MoverTracker<PointT>::operator=(const MoverTracker& other) {
+  if (this == &other) return *this;
+  // Every member but the work buffers (registration_, view_*), which each tracker keeps its own.
+  parameters_ = other.parameters_;
+  tracks_ = other.tracks_;
+  results_ = other.results_;
+  next_id_ = other.next_id_;
+  registrations_ = other.registrations_;
+  has_time_ = other.has_time_;
+  last_time_ = other.last_time_;
+  free_space_map_ = other.free_space_map_;
+  for (auto& t : tracks_)
+    if (t.model) t.model.reset(new SurfaceDensity(*t.model));
+  return *this;
+}
+
+template <typename PointT>
 const typename MoverTracker<PointT>::Track* MoverTracker<PointT>::findTrack(int id) const {
   for (const auto& t : tracks_)
     if (t.id == id) return &t;
