@@ -8,6 +8,7 @@
 #include <pcl_movers/sim/lidar_simulator.h>
 #include <pcl_movers/sim/scenario.h>
 
+#include <cmath>
 #include <filesystem>
 #include <map>
 
@@ -189,4 +190,65 @@ TEST(MoverDetector, KittiVanAndCyclist) {
   // The parked van (track 3) must never be a mover (5 of 25 frames before the free-space test,
   // while it comes into view at ~40 m).
   EXPECT_EQ(score.static_alarms, 0);
+}
+
+// The organizer, ground filter and segmenter are kept from frame to frame (their buffers and the
+// organizer's row lookup are reused): every frame must still come out as from a fresh detector,
+// whatever the earlier frames' sizes were, and a copied detector must run on its own objects.
+TEST(MoverDetector, StageObjectsReusedAcrossFrames) {
+  const std::string folder = std::string(PCL_MOVERS_SHARED_DATA) + "/kitti-tracking-0000-a";
+  if (!std::filesystem::is_directory(folder))
+    GTEST_SKIP() << "KITTI data not found at " << folder << " (set PCL_MOVERS_SHARED_DATA)";
+  pcl_movers::io::SequenceReader reader(folder);
+  const pcl_movers::DetectorParameters params;
+  Detector detector;
+  detector.setParameters(params);
+  Detector copy;
+  const std::size_t frames = std::min<std::size_t>(reader.size(), 6), copy_at = 3;
+  const auto same_xyz = [](const PointT& a, const PointT& b) {
+    const auto eq = [](float u, float v) { return u == v || (std::isnan(u) && std::isnan(v)); };
+    return eq(a.x, b.x) && eq(a.y, b.y) && eq(a.z, b.z);
+  };
+  for (std::size_t i = 0; i < frames; ++i) {
+    pcl::PointCloud<PointT>::Ptr scan(new pcl::PointCloud<PointT>);
+    reader.read(i, *scan);
+    scan->sensor_origin_.setZero();
+    scan->sensor_orientation_.setIdentity();
+    ASSERT_FALSE(scan->isOrganized() && scan->height > 1);  // so the organizer runs
+    if (i == copy_at) copy = detector;
+    Detector::FrameResult result, fresh_result, copy_result;
+    detector.process(scan, reader.pose(i), reader.time(i), static_cast<int>(i), result);
+    Detector fresh;
+    fresh.setParameters(params);
+    fresh.process(scan, reader.pose(i), reader.time(i), static_cast<int>(i), fresh_result);
+    ASSERT_EQ(result.organized->size(), fresh_result.organized->size());
+    for (std::size_t k = 0; k < result.organized->size(); ++k)
+      ASSERT_TRUE(same_xyz((*result.organized)[k], (*fresh_result.organized)[k])) << i << " " << k;
+    const auto objects = detector.removeGround(result.organized);
+    EXPECT_EQ(*objects, *fresh.removeGround(result.organized)) << "frame " << i;
+    const auto clusters = detector.segmentObjects(result.organized, objects);
+    const auto fresh_clusters = fresh.segmentObjects(result.organized, objects);
+    ASSERT_EQ(clusters.size(), fresh_clusters.size()) << "frame " << i;
+    EXPECT_GT(clusters.size(), 10u);
+    for (std::size_t c = 0; c < clusters.size(); ++c)
+      EXPECT_EQ(clusters[c].indices, fresh_clusters[c].indices) << "frame " << i;
+    EXPECT_EQ(result.clusters, static_cast<int>(clusters.size()));
+    if (i >= copy_at) {
+      // The copy organizes and segments with its own stage objects and continues the sequence
+      // exactly as the original (own tracker models: same tracks, same rows).
+      copy.process(scan, reader.pose(i), reader.time(i), static_cast<int>(i), copy_result);
+      ASSERT_EQ(result.organized->size(), copy_result.organized->size());
+      for (std::size_t k = 0; k < result.organized->size(); ++k)
+        ASSERT_TRUE(same_xyz((*result.organized)[k], (*copy_result.organized)[k])) << i;
+      EXPECT_EQ(*copy.removeGround(result.organized), *objects) << "frame " << i;
+      ASSERT_EQ(result.rows.size(), copy_result.rows.size()) << "frame " << i;
+      for (std::size_t r = 0; r < result.rows.size(); ++r) {
+        EXPECT_EQ(result.rows[r].track_id, copy_result.rows[r].track_id);
+        EXPECT_EQ(result.rows[r].mover, copy_result.rows[r].mover);
+        EXPECT_DOUBLE_EQ(result.rows[r].vx, copy_result.rows[r].vx);
+        EXPECT_DOUBLE_EQ(result.rows[r].similarity, copy_result.rows[r].similarity);
+        EXPECT_EQ(result.cluster_indices[r].indices, copy_result.cluster_indices[r].indices);
+      }
+    }
+  }
 }

@@ -374,6 +374,51 @@ TEST(MoverTracker, StaticTrackThatStartsMovingIsFollowed) {
   }
 }
 
+// static_clearance: a person standing between two posts 1.5 m away (parked cars in a row,
+// bushes) used to be registered every frame, since any cluster within 2 m counted as ambiguous.
+// With the posts beyond static_clearance (1 m) the still tracks are registered only every
+// static_refresh_frames, and the person who then walks off is followed and confirmed exactly as
+// before; posts 0.6 m away (within the clearance) still make every track register.
+TEST(MoverTracker, StillTrackWithNeighboursBeyondClearanceIsNotRegistered) {
+  std::map<std::pair<double, double>, int> registrations_still, mover_frames;
+  const auto at = [](double spacing, double clearance) {
+    return std::make_pair(spacing, clearance);
+  };
+  for (const double spacing : {1.5, 0.6})
+    for (const double clearance : {1.0, 2.0}) {
+      auto params = defaults();
+      params.static_clearance = clearance;
+      Tracker tracker;
+      tracker.setParameters(params);
+      const Eigen::Vector3d sensor(0, 0, 1.7);
+      std::set<int> ids;
+      const auto key = at(spacing, clearance);
+      for (int k = 0; k < 60; ++k) {
+        const double t = 0.1 * k;
+        const double walked = k < 30 ? 0.0 : 1.5 * (t - 3.0);
+        SceneBuilder scene;
+        scene.addBox(sensor, Eigen::Vector2d(12 + walked, 0), 0.0, 0.4, 0.4, 1.8);
+        scene.addBox(sensor, Eigen::Vector2d(12, spacing), 0.0, 0.2, 0.2, 1.5);
+        scene.addBox(sensor, Eigen::Vector2d(12, -spacing), 0.0, 0.2, 0.2, 1.5);
+        const auto results = step(tracker, scene, sensor, t);
+        ASSERT_EQ(results.size(), 3u);
+        if (k >= 10 && k < 30) registrations_still[key] += tracker.getRegistrationCount();
+        if (k >= 29) ids.insert(results[0].track_id);
+        if (k >= 45) mover_frames[key] += results[0].mover;
+        EXPECT_FALSE(results[1].mover || results[2].mover);
+      }
+      EXPECT_EQ(ids.size(), 1u) << spacing << " " << clearance;
+    }
+  // 1.5 m: three still tracks over 20 frames, registered every 4th frame (and a few more).
+  EXPECT_GE(registrations_still[at(1.5, 2.0)], 60);
+  EXPECT_LT(registrations_still[at(1.5, 1.0)], 30);
+  // 0.6 m: ambiguous neighbours, registered every frame whatever the clearance.
+  EXPECT_GE(registrations_still[at(0.6, 1.0)], 60);
+  EXPECT_EQ(registrations_still[at(0.6, 1.0)], registrations_still[at(0.6, 2.0)]);
+  for (const auto& m : mover_frames)
+    EXPECT_EQ(m.second, 15) << m.first.first << " " << m.first.second;
+}
+
 // Claimed clusters: while a post is hidden, its coasting track does not register the neighbouring
 // post a live track matched well, and it still re-acquires its own post when that reappears.
 TEST(MoverTracker, CoastingStaticTrackSkipsClaimedClustersAndIsReacquired) {
@@ -407,18 +452,26 @@ TEST(MoverTracker, CoastingStaticTrackSkipsClaimedClustersAndIsReacquired) {
 
 TEST(MoverTracker, FitVelocityUsesScatterOfPositions) {
   std::deque<Eigen::Vector3d> history;
-  Eigen::Vector2d v;
-  double sigma_v = 0;
   history.emplace_back(0, 0, 0);
   history.emplace_back(0.14, 0, 0.1);
-  EXPECT_FALSE(Tracker::fitVelocity(history, 0.1, v, sigma_v));  // no scatter from 2 points
+  const auto two = Tracker::fitVelocity(history, 0.1);
+  EXPECT_FALSE(two.valid);  // no scatter from 2 points
+  EXPECT_TRUE(std::isinf(two.sigma_v));
   // Walking at 1.4 m/s, positions exact: σ is the floor (0.1 m) over sqrt(Σ(t - t̄)²).
   for (int k = 2; k < 6; ++k) history.emplace_back(0.14 * k, 0, 0.1 * k);
-  ASSERT_TRUE(Tracker::fitVelocity(history, 0.1, v, sigma_v));
-  EXPECT_NEAR(v.x(), 1.4, 1e-9);
-  EXPECT_NEAR(v.y(), 0.0, 1e-9);
-  EXPECT_NEAR(sigma_v, 0.1 / std::sqrt(0.175), 1e-9);
-  EXPECT_GT(v.norm(), 2.0 * sigma_v);
+  const auto fit = Tracker::fitVelocity(history, 0.1);
+  ASSERT_TRUE(fit.valid);
+  EXPECT_NEAR(fit.velocity.x(), 1.4, 1e-9);
+  EXPECT_NEAR(fit.velocity.y(), 0.0, 1e-9);
+  EXPECT_NEAR(fit.sigma, 0.1, 1e-12);
+  EXPECT_NEAR(fit.sigma_v, 0.1 / std::sqrt(0.175), 1e-9);
+  EXPECT_GT(fit.velocity.norm(), 2.0 * fit.sigma_v);
+  // The line's centre and spread (what velocity_fit_init restarts the filter from).
+  EXPECT_EQ(fit.positions, 6u);
+  EXPECT_NEAR(fit.mean_time, 0.25, 1e-12);
+  EXPECT_NEAR(fit.mean_position.x(), 0.35, 1e-12);
+  EXPECT_NEAR(fit.mean_position.y(), 0.0, 1e-12);
+  EXPECT_NEAR(fit.time_spread, 0.175, 1e-12);
   // A static object whose registered positions scatter by a few tenths of a metre (a far,
   // coarsely sampled object): the line through them is faster than mover_speed, but the
   // scatter about it makes it no evidence of motion.
@@ -426,9 +479,11 @@ TEST(MoverTracker, FitVelocityUsesScatterOfPositions) {
   const double xs[6] = {0.2, -0.2, 0.1, -0.25, 0.15, -0.1};
   const double ys[6] = {-0.5, 0.4, -0.4, 0.6, -0.1, 0.6};
   for (int k = 0; k < 6; ++k) noisy.emplace_back(xs[k], ys[k], 0.1 * k);
-  ASSERT_TRUE(Tracker::fitVelocity(noisy, 0.1, v, sigma_v));
-  EXPECT_GT(v.norm(), 1.2);
-  EXPECT_LT(v.norm(), 2.0 * sigma_v);
+  const auto scattered = Tracker::fitVelocity(noisy, 0.1);
+  ASSERT_TRUE(scattered.valid);
+  EXPECT_GT(scattered.sigma, 0.1);  // the scatter, above the floor
+  EXPECT_GT(scattered.velocity.norm(), 1.2);
+  EXPECT_LT(scattered.velocity.norm(), 2.0 * scattered.sigma_v);
 }
 
 // A pedestrian walking across at 50 m, registered to a few cm: the Kalman velocity's σ, built
@@ -484,4 +539,40 @@ TEST(MoverTracker, YoungTrackVelocityFromLineFit) {
   // Measured: 1.0 m/s with the restart, 2.6 m/s without.
   EXPECT_LT(error[1], 1.5);
   EXPECT_GT(error[0], 2.0);
+}
+
+// A copied tracker owns its models: feeding the copy other frames must not change what the
+// original computes (they shared the SurfaceDensity models before, so the copy's views were
+// accumulated into the original's models).
+TEST(MoverTracker, CopyOwnsItsModels) {
+  const Eigen::Vector3d sensor(0, 0, 1.7);
+  const auto frame = [&](double x) {
+    SceneBuilder scene;
+    scene.addBox(sensor, Eigen::Vector2d(x, 0), 0.3, 4.2, 1.8, 1.5);
+    return scene;
+  };
+  Tracker original, reference;
+  original.setParameters(defaults());
+  reference.setParameters(defaults());
+  for (int k = 0; k < 5; ++k) {
+    auto scene = frame(15 + 0.8 * k);
+    step(original, scene, sensor, 0.1 * k);
+    step(reference, scene, sensor, 0.1 * k);
+  }
+  Tracker copy(original);
+  for (int k = 5; k < 12; ++k) {
+    auto other = frame(15 + 0.8 * 4 - 0.4 * (k - 4));  // the copy sees the car reversing
+    step(copy, other, sensor, 0.1 * k);
+    auto scene = frame(15 + 0.8 * k);
+    const auto a = step(original, scene, sensor, 0.1 * k);
+    const auto b = step(reference, scene, sensor, 0.1 * k);
+    ASSERT_EQ(a.size(), b.size());
+    for (std::size_t c = 0; c < a.size(); ++c) {
+      EXPECT_EQ(a[c].track_id, b[c].track_id) << k;
+      EXPECT_DOUBLE_EQ(a[c].similarity, b[c].similarity) << k;
+      EXPECT_DOUBLE_EQ(a[c].velocity.x(), b[c].velocity.x()) << k;
+    }
+  }
+  ASSERT_EQ(copy.getTracks().size(), original.getTracks().size());
+  EXPECT_NE(copy.getTracks()[0].model, original.getTracks()[0].model);
 }

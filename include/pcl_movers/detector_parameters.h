@@ -99,6 +99,11 @@ struct DetectorParameters {
   int static_refresh_frames = 4;
   /// Largest centroid shift [m] of such a candidate that counts as "still".
   double static_shift = 0.15;
+  /// Such a track's nearest cluster is only taken unregistered when every other cluster's
+  /// centroid is farther than this from the track's last centroid [m] (2 = two gate margins, the
+  /// earlier rule: one cluster within 2 m). Closer neighbours (parked cars in a row, bushes) are
+  /// no ambiguity for a cluster that stayed within static_shift and kept its size.
+  double static_clearance = 1.0;
   /// A track's gated candidates are registered nearest centroid first; once one reaches this
   /// similarity the farther ones are skipped (cost control; > 1 registers them all, the paper's).
   double registration_stop_similarity = 0.8;
@@ -224,6 +229,8 @@ void DetectorParameters::forEachParameter(F&& f) {
     "position sigma per metre of range");
   f("static_refresh_frames", static_refresh_frames, "register still static tracks every N frames");
   f("static_shift", static_shift, "max centroid shift of a still static track [m]");
+  f("static_clearance", static_clearance,
+    "other clusters this close make a still static track register [m]");
   f("registration_stop_similarity", registration_stop_similarity,
     "skip farther candidates of a track after a registration this good");
   f("initial_velocity_sigma", initial_velocity_sigma, "velocity sigma of a new track [m/s]");
@@ -365,6 +372,7 @@ inline void DetectorParameters::validate() const {
   positive("max_tracks", max_tracks);
   positive("mover_window", mover_window);
   positive("static_refresh_frames", static_refresh_frames);
+  if (!(static_clearance >= 0)) throw InputError("parameter static_clearance must be >= 0");
   positive("mover_votes", mover_votes);
   if (mover_votes > mover_window)
     throw InputError("parameter mover_votes must not exceed mover_window");

@@ -15,11 +15,20 @@
 
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
 
 namespace pcl_movers {
+
+// The stage classes are only held by pointer here, so that this header stays light.
+template <typename PointT>
+class GroundPlaneFilter;
+template <typename PointT>
+class RangeImageRegionGrowing;
+template <typename PointT>
+class RangeImageOrganizer;
 
 /** \brief The whole mover-detection pipeline for one frame (DESIGN.md "The pipeline"):
  * organize (when the scan is not organized yet) → GroundPlaneFilter → RangeImageRegionGrowing →
@@ -89,6 +98,7 @@ class MoverDetector {
   void setSensorModel(const SensorModel& model) {
     sensor_model_ = model;
     has_sensor_model_ = true;
+    organizer_.object.reset();  // its lookups were built for the old model
   }
   const SensorModel& getSensorModel() const { return sensor_model_; }
 
@@ -105,13 +115,15 @@ class MoverDetector {
 
   /** \brief The ground stage of process(): indices of the non-ground points of `organized`,
    * with the current parameters. Public so that benchmarks and tools reproduce the tracker's input
-   * exactly instead of re-configuring the stages by hand. */
-  pcl::IndicesPtr removeGround(const PointCloudConstPtr& organized) const;
+   * exactly instead of re-configuring the stages by hand. Not const: it runs the detector's own
+   * GroundPlaneFilter, whose work buffers are kept from frame to frame. */
+  pcl::IndicesPtr removeGround(const PointCloudConstPtr& organized);
 
   /** \brief The segmentation stage of process(): clusters of `objects` (indices into
-   * `organized`), with the current parameters. */
+   * `organized`), with the current parameters (the detector's own RangeImageRegionGrowing, as
+   * removeGround()). */
   std::vector<pcl::PointIndices> segmentObjects(const PointCloudConstPtr& organized,
-                                                const pcl::IndicesPtr& objects) const;
+                                                const pcl::IndicesPtr& objects);
 
   /** \brief The transform stage of process(): the points of `clusters` moved by `pose` into
    * `world` (only cluster points), and each cluster's indices into `world`. */
@@ -130,11 +142,31 @@ class MoverDetector {
   /** \brief Organizes `scan` into a range image (copy when it is already organized). */
   PointCloudConstPtr organize(const PointCloudConstPtr& scan);
 
+  /** \brief A stage object kept between frames so that its work buffers (and the organizer's
+   * lookup tables) are reused instead of reallocated every frame. Created on first use; a copy of
+   * the detector starts without one, so two detectors never share buffers. */
+  template <typename T>
+  struct StageObject {
+    std::shared_ptr<T> object;
+    StageObject() = default;
+    StageObject(const StageObject&) {}
+    StageObject& operator=(const StageObject&) {
+      object.reset();
+      return *this;
+    }
+    StageObject(StageObject&&) noexcept = default;
+    StageObject& operator=(StageObject&&) noexcept = default;
+    ~StageObject() = default;
+  };
+
   DetectorParameters parameters_;
   SensorModel sensor_model_;
   bool has_sensor_model_ = false;
   MoverTracker<PointT> tracker_;
   FreeSpaceMap free_space_;  ///< recent scans for the tracker's free-space test
+  StageObject<RangeImageOrganizer<PointT>> organizer_;
+  StageObject<GroundPlaneFilter<PointT>> ground_;
+  StageObject<RangeImageRegionGrowing<PointT>> segmenter_;
   std::vector<std::pair<std::string, double>> timings_;
 };
 

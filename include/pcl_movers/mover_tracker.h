@@ -15,6 +15,7 @@
 
 #include <Eigen/Geometry>
 #include <deque>
+#include <limits>
 #include <vector>
 
 namespace pcl_movers {
@@ -137,6 +138,14 @@ class MoverTracker {
   };
 
   MoverTracker() = default;
+  /** \brief A copy owns copies of the tracks' models, so that the copy and the original can both
+   * keep tracking (sharing them, each would accumulate its views into the other's models). Work
+   * buffers are not copied. */
+  MoverTracker(const MoverTracker& other);
+  MoverTracker& operator=(const MoverTracker& other);
+  MoverTracker(MoverTracker&&) = default;
+  MoverTracker& operator=(MoverTracker&&) = default;
+  ~MoverTracker() = default;
 
   /** \brief Uses the tracker and registration entries of `parameters` (validated by the caller). */
   void setParameters(const DetectorParameters& parameters) { parameters_ = parameters; }
@@ -166,11 +175,24 @@ class MoverTracker {
   /** \brief Total number of tracks ever started. */
   int getTracksStarted() const { return next_id_; }
 
-  /** \brief Least-squares line through measured positions (x, y, time): its velocity and the
-   * velocity's σ (per axis) from the scatter of the positions about the line, at least
-   * `min_sigma`. False (σ infinite) with fewer than 3 positions or no time span. */
-  static bool fitVelocity(const std::deque<Eigen::Vector3d>& history, double min_sigma,
-                          Eigen::Vector2d& velocity, double& sigma_v);
+  /** \brief Least-squares line through measured positions (x, y, time), see fitVelocity(). */
+  struct LineFit {
+    bool valid = false;  ///< false with fewer than 3 positions or no time span
+    Eigen::Vector2d velocity = Eigen::Vector2d::Zero();  ///< slope of the line [m/s]
+    /// σ of the velocity per axis: `sigma` / sqrt(`time_spread`); infinite when not valid.
+    double sigma_v = std::numeric_limits<double>::infinity();
+    /// σ of one position about the line per axis (the scatter, at least the floor) [m].
+    double sigma = std::numeric_limits<double>::infinity();
+    Eigen::Vector2d mean_position = Eigen::Vector2d::Zero();  ///< centre of the line
+    double mean_time = 0;                                     ///< time of mean_position [s]
+    double time_spread = 0;                                   ///< Σ (t - mean_time)² [s²]
+    std::size_t positions = 0;
+  };
+
+  /** \brief Least-squares line through measured positions (x, y, time): its velocity, the
+   * velocity's σ (per axis) from the scatter of the positions about the line (at least
+   * `min_sigma`), and the means and spread a caller needs to restart a filter from the line. */
+  static LineFit fitVelocity(const std::deque<Eigen::Vector3d>& history, double min_sigma);
 
   /** \brief Forgets all tracks. */
   void reset();

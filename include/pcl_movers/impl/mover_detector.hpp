@@ -32,8 +32,10 @@ void MoverDetector<PointT>::setParameters(const DetectorParameters& parameters) 
   tracker_.setParameters(parameters);
   tracker_.reset();
   free_space_.clear();
-  if (!has_sensor_model_ && parameters.sensor != "auto")
+  if (!has_sensor_model_ && parameters.sensor != "auto") {
     sensor_model_ = SensorModel::fromName(parameters.sensor);
+    organizer_.object.reset();
+  }
 }
 
 template <typename PointT>
@@ -44,13 +46,17 @@ typename MoverDetector<PointT>::PointCloudConstPtr MoverDetector<PointT>::organi
     // "auto": estimate the beam layout once, from the first unorganized scan.
     sensor_model_ = SensorModel::estimate(*scan);
     has_sensor_model_ = true;
+    organizer_.object.reset();
   }
   PointCloudPtr organized(new PointCloud);
 #ifdef PCL_MOVERS_HAVE_ORGANIZER
-  RangeImageOrganizer<PointT> organizer;
-  organizer.setSensorModel(sensor_model_);
-  organizer.setInputCloud(scan);
-  organizer.organize(*organized);
+  // Kept between frames: its row lookup is built once per sensor model, not once per scan.
+  if (!organizer_.object) {
+    organizer_.object = std::make_shared<RangeImageOrganizer<PointT>>();
+    organizer_.object->setSensorModel(sensor_model_);
+  }
+  organizer_.object->setInputCloud(scan);
+  organizer_.object->organize(*organized);
 #else
   // Plain projection onto the sensor model's grid, nearest return per cell.
   const int rows = sensor_model_.rows(), cols = sensor_model_.columns();
@@ -79,9 +85,10 @@ typename MoverDetector<PointT>::PointCloudConstPtr MoverDetector<PointT>::organi
 }
 
 template <typename PointT>
-pcl::IndicesPtr MoverDetector<PointT>::removeGround(const PointCloudConstPtr& organized) const {
+pcl::IndicesPtr MoverDetector<PointT>::removeGround(const PointCloudConstPtr& organized) {
   const auto& p = parameters_;
-  GroundPlaneFilter<PointT> ground;
+  if (!ground_.object) ground_.object = std::make_shared<GroundPlaneFilter<PointT>>();
+  GroundPlaneFilter<PointT>& ground = *ground_.object;
   ground.setInputCloud(organized);
   ground.setDistanceThreshold(static_cast<float>(p.ground_distance));
   ground.setMaxTilt(static_cast<float>(p.ground_max_slope_deg * M_PI / 180.0));
@@ -94,9 +101,10 @@ pcl::IndicesPtr MoverDetector<PointT>::removeGround(const PointCloudConstPtr& or
 
 template <typename PointT>
 std::vector<pcl::PointIndices> MoverDetector<PointT>::segmentObjects(
-    const PointCloudConstPtr& organized, const pcl::IndicesPtr& objects) const {
+    const PointCloudConstPtr& organized, const pcl::IndicesPtr& objects) {
   const auto& p = parameters_;
-  RangeImageRegionGrowing<PointT> segmenter;
+  if (!segmenter_.object) segmenter_.object = std::make_shared<RangeImageRegionGrowing<PointT>>();
+  RangeImageRegionGrowing<PointT>& segmenter = *segmenter_.object;
   segmenter.setInputCloud(organized);
   segmenter.setIndices(objects);
   segmenter.setDepthThresholdFactor(static_cast<float>(p.depth_ratio));

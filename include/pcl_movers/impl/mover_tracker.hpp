@@ -63,6 +63,28 @@ typename MoverTracker<PointT>::ClusterFeatures MoverTracker<PointT>::computeFeat
 }
 
 template <typename PointT>
+MoverTracker<PointT>::MoverTracker(const MoverTracker& other) {
+  *this = other;
+}
+
+template <typename PointT>
+MoverTracker<PointT>& MoverTracker<PointT>::operator=(const MoverTracker& other) {
+  if (this == &other) return *this;
+  // Every member but the work buffers (registration_, view_*), which each tracker keeps its own.
+  parameters_ = other.parameters_;
+  tracks_ = other.tracks_;
+  results_ = other.results_;
+  next_id_ = other.next_id_;
+  registrations_ = other.registrations_;
+  has_time_ = other.has_time_;
+  last_time_ = other.last_time_;
+  free_space_map_ = other.free_space_map_;
+  for (auto& t : tracks_)
+    if (t.model) t.model.reset(new SurfaceDensity(*t.model));
+  return *this;
+}
+
+template <typename PointT>
 const typename MoverTracker<PointT>::Track* MoverTracker<PointT>::findTrack(int id) const {
   for (const auto& t : tracks_)
     if (t.id == id) return &t;
@@ -179,12 +201,12 @@ void MoverTracker<PointT>::buildView(const Candidate& candidate, const Eigen::Ma
 }
 
 template <typename PointT>
-bool MoverTracker<PointT>::fitVelocity(const std::deque<Eigen::Vector3d>& history, double min_sigma,
-                                       Eigen::Vector2d& velocity, double& sigma_v) {
-  velocity.setZero();
-  sigma_v = std::numeric_limits<double>::infinity();
+typename MoverTracker<PointT>::LineFit MoverTracker<PointT>::fitVelocity(
+    const std::deque<Eigen::Vector3d>& history, double min_sigma) {
+  LineFit fit;
   const std::size_t n = history.size();
-  if (n < 3) return false;  // a line through two points has no scatter to judge it by
+  fit.positions = n;
+  if (n < 3) return fit;  // a line through two points has no scatter to judge it by
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   for (const auto& h : history) mean += h;
   mean /= static_cast<double>(n);
@@ -195,8 +217,11 @@ bool MoverTracker<PointT>::fitVelocity(const std::deque<Eigen::Vector3d>& histor
     stt += dt * dt;
     sxt += dt * (h.template head<2>() - mean.template head<2>());
   }
-  if (!(stt > 0)) return false;
-  velocity = sxt / stt;
+  fit.mean_position = mean.template head<2>();
+  fit.mean_time = mean.z();
+  fit.time_spread = stt;
+  if (!(stt > 0)) return fit;
+  const Eigen::Vector2d velocity = sxt / stt;
   double ss = 0;
   for (const auto& h : history) {
     const Eigen::Vector2d r =
@@ -204,9 +229,11 @@ bool MoverTracker<PointT>::fitVelocity(const std::deque<Eigen::Vector3d>& histor
     ss += r.squaredNorm();
   }
   // Per-axis σ of the positions about the line: 2 (n - 2) degrees of freedom over x and y.
-  const double sigma = std::max(min_sigma, std::sqrt(ss / (2.0 * static_cast<double>(n - 2))));
-  sigma_v = sigma / std::sqrt(stt);
-  return true;
+  fit.sigma = std::max(min_sigma, std::sqrt(ss / (2.0 * static_cast<double>(n - 2))));
+  fit.sigma_v = fit.sigma / std::sqrt(stt);
+  fit.velocity = velocity;
+  fit.valid = true;
+  return fit;
 }
 
 template <typename PointT>
@@ -310,9 +337,10 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     results_[c].features = cand.features;
   }
 
-  // Cheap frames for established static tracks (see static_refresh_frames): the track's single
-  // gated candidate has a centroid that moved as little as the (near zero) prediction says.
-  std::vector<char> cheap(tracks_.size(), 0);
+  // Cheap frames for established static tracks (see static_refresh_frames): the track's nearest
+  // usable cluster has a centroid that moved as little as the (near zero) prediction says, and no
+  // other cluster is within static_clearance. cheap[ti] is that cluster (-1: register as usual).
+  std::vector<int> cheap(tracks_.size(), -1);
   if (use_registration && p.static_refresh_frames > 1) {
     for (std::size_t ti = 0; ti < tracks_.size(); ++ti) {
       const Track& track = tracks_[ti];
@@ -320,18 +348,37 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
           track.filter.speed() > 0.5 * p.mover_speed ||
           track.since_registration + 1 >= p.static_refresh_frames)
         continue;
-      int in_gate = 0;
-      bool still = false;
-      for (const auto& cand : candidates) {
+      double nearest = std::numeric_limits<double>::max(), second = nearest;
+      int nearest_cluster = -1;
+      for (std::size_t c = 0; c < candidates.size(); ++c) {
+        const auto& cand = candidates[c];
         if (!cand.usable) continue;
         const double d =
             (cand.features.centroid - track.features.centroid).template head<2>().norm();
-        // Another cluster this close would make the association ambiguous: register then.
-        if (d > 2 * p.gate_margin) continue;
-        ++in_gate;
-        still = d < p.static_shift;
+        if (d < nearest) {
+          second = nearest;
+          nearest = d;
+          nearest_cluster = static_cast<int>(c);
+        } else if (d < second) {
+          second = d;
+        }
       }
-      cheap[ti] = in_gate == 1 && still;
+      if (nearest_cluster < 0 || !(nearest < p.static_shift)) continue;
+      // Another cluster this close would make the association ambiguous: register then.
+      if (second <= p.static_clearance) continue;
+      if (second <= 2 * p.gate_margin) {
+        // A neighbour within the old two-gate-margin bound (it was always registered then): the
+        // cluster must also have kept its size, so a split or merge with that neighbour (which
+        // moves the centroid little when the other part is small) is registered.
+        const auto& f = candidates[nearest_cluster].features;
+        const double points_ratio =
+            static_cast<double>(f.points) / std::max(1, track.features.points);
+        if (points_ratio < 0.8 || points_ratio > 1.25 ||
+            std::abs(f.height - track.features.height) > 0.3 ||
+            std::abs(f.length - track.features.length) > 0.3)
+          continue;
+      }
+      cheap[ti] = nearest_cluster;
     }
   }
 
@@ -397,8 +444,10 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
       Match m;
       m.track = ti;
       m.cluster = c;
-      if (!centroid_only && cheap[ti]) {
-        // Established static track whose only candidate did not move: seen, no registration.
+      if (!centroid_only && cheap[ti] >= 0) {
+        // Established static track whose nearest cluster did not move: seen, no registration;
+        // its other gated clusters are left to the other tracks.
+        if (static_cast<int>(c) != cheap[ti]) continue;
         m.cheap = true;
         m.measurement = Eigen::Vector3d(predicted.x(), predicted.y(), track.z);
         m.score = track.similarity;
@@ -523,27 +572,19 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
       // anchored on the birth position (a car at 80 m took 10+ frames). At the third
       // registration the filter restarts from the least-squares line through the three
       // positions, with that line's covariance (σ as in the updates, or the scatter if larger).
-      Eigen::Vector2d v;
-      double sigma_v = 0;
-      if (fitVelocity(t.history, meas_sigma, v, sigma_v)) {
-        double t_mean = 0;
-        for (const auto& h : t.history) t_mean += h.z();
-        t_mean /= static_cast<double>(t.history.size());
-        double stt = 0;
-        Eigen::Vector2d x_mean = Eigen::Vector2d::Zero();
-        for (const auto& h : t.history) {
-          stt += (h.z() - t_mean) * (h.z() - t_mean);
-          x_mean += h.template head<2>();
-        }
-        x_mean /= static_cast<double>(t.history.size());
-        const double s2 = sigma_v * sigma_v * stt;  // σ² of one position
+      const LineFit fit = fitVelocity(t.history, meas_sigma);
+      if (fit.valid) {
+        const double t_mean = fit.mean_time, stt = fit.time_spread;
+        const Eigen::Vector2d& x_mean = fit.mean_position;
+        const Eigen::Vector2d& v = fit.velocity;
+        const double s2 = fit.sigma_v * fit.sigma_v * stt;  // σ² of one position
         const double dt_now = time - t_mean;
         KalmanFilterCV::State state;
         state.template head<2>() = x_mean + v * dt_now;
         state.template tail<2>() = v;
         KalmanFilterCV::Covariance cov = KalmanFilterCV::Covariance::Zero();
         const double var_p =
-            s2 * (1.0 / static_cast<double>(t.history.size()) + dt_now * dt_now / stt);
+            s2 * (1.0 / static_cast<double>(fit.positions) + dt_now * dt_now / stt);
         const double var_v = s2 / stt, cov_pv = s2 * dt_now / stt;
         for (int a = 0; a < 2; ++a) {
           cov(a, a) = var_p;
@@ -565,11 +606,10 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
       // Kalman test: with their 0.3 m σ floor a 6-position line cannot tell a walker (σ_v 0.7
       // m/s), where the filter's longer memory can (centroid-mode walkers were lost).
       const double floor = p.registration_sigma;
-      Eigen::Vector2d v;
-      double sigma_v = 0;
-      const bool fitted = fitVelocity(t.history, floor, v, sigma_v);
-      const double speed = v.norm();
-      t.fast.push_back(fitted && speed > p.mover_speed && speed > p.mover_speed_sigmas * sigma_v);
+      const LineFit fit = fitVelocity(t.history, floor);
+      const double speed = fit.velocity.norm();
+      t.fast.push_back(fit.valid && speed > p.mover_speed &&
+                       speed > p.mover_speed_sigmas * fit.sigma_v);
     } else {
       // Fast only when the speed is above the threshold and well above its own uncertainty.
       const Eigen::Vector2d v = t.filter.velocity();
