@@ -3,6 +3,7 @@
  */
 #include "tool_utils.h"
 
+#include <pcl_movers/ground_plane_filter.h>
 #include <pcl_movers/io/sequence.h>
 
 #include <unistd.h>
@@ -117,6 +118,13 @@ void GroundOptions::parse(int argc, char** argv) {
       throw InputError("--sectors: expected an integer in 1..4096, got '" + v + "'");
     sectors = static_cast<int>(s);
   }
+}
+
+void GroundOptions::applyTo(GroundPlaneFilter<pcl::PointXYZI>& filter) const {
+  filter.setDistanceThreshold(distance);
+  filter.setMaxTilt(tilt_deg * float(M_PI) / 180.f);
+  filter.setSensorHeight(sensor_height);
+  filter.setNumSectors(sectors);
 }
 
 std::string GroundOptions::help() const {

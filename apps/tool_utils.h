@@ -6,7 +6,6 @@
 #pragma once
 
 #include <pcl_movers/common.h>
-#include <pcl_movers/ground_plane_filter.h>
 
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/console/parse.h>
@@ -22,6 +21,9 @@
 #include <vector>
 
 namespace pcl_movers {
+template <typename PointT>
+class GroundPlaneFilter;
+
 namespace tools {
 
 /** \brief True when -h or --help is among the arguments. */
@@ -84,13 +86,9 @@ struct GroundOptions {
   void parse(int argc, char** argv);
   /** \brief Help lines for the options, with these values as defaults. */
   std::string help() const;
-  template <typename PointT>
-  void applyTo(GroundPlaneFilter<PointT>& filter) const {
-    filter.setDistanceThreshold(distance);
-    filter.setMaxTilt(tilt_deg * float(M_PI) / 180.f);
-    filter.setSensorHeight(sensor_height);
-    filter.setNumSectors(sectors);
-  }
+  /** \brief Sets these options on a filter (the tools work on PointXYZI; kept out of this
+   * header so the tools that do not remove ground need not parse the filter's templates). */
+  void applyTo(GroundPlaneFilter<pcl::PointXYZI>& filter) const;
 };
 
 /** \brief Runs `body`, turns exceptions into a clear "[tool] error: ..." and exit code 1. */

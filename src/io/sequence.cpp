@@ -75,7 +75,7 @@ void checkPcdClaimedSize(const std::string& path) {
   std::uint32_t point_step = 0, width = 0, height = 0, claimed_step = 0;
   long long values_per_point = 0, claimed_values = 0;  // numbers per point in ascii (Σ COUNT)
   unsigned long long claimed_points = 0, claimed_bytes = 0;
-  bool overflow = false, data_line = false;
+  bool data_line = false;
   std::size_t points_line = 0, line_number = 0;
   std::string line, data_type = "ascii";  // PCL's default when there is no DATA line
   std::streamoff data_start = -1;
@@ -135,8 +135,8 @@ void checkPcdClaimedSize(const std::string& path) {
       unsigned long long points = 0;
       tokens >> points;
       points = std::max(points, static_cast<unsigned long long>(width) * height);
+      // Saturates: a product beyond 64 bits is kept as the largest claim, which no file holds.
       const bool too_many = point_step > 0 && points > ~0ull / point_step;
-      overflow = overflow || too_many;
       const unsigned long long bytes = too_many ? ~0ull : points * point_step;
       if (bytes >= claimed_bytes) {
         claimed_bytes = bytes;
@@ -162,17 +162,14 @@ void checkPcdClaimedSize(const std::string& path) {
       end > start ? static_cast<unsigned long long>(end - start) : 0ull;
   const bool compressed = data_type.compare(0, 17, "binary_compressed") == 0;
   const bool binary = !compressed && data_type.compare(0, 6, "binary") == 0;
-  bool fits = !overflow;
-  if (fits && binary) fits = claimed_bytes <= available;
-  if (fits && compressed) fits = claimed_bytes <= 88 * available;
-  if (fits && !binary && !compressed) {
-    // Each point's line holds its values, each at least one character plus a separator (or the
-    // newline); the last line may lack its newline. A value is at most 8 bytes in memory.
-    const unsigned long long text_per_point =
-        2 * static_cast<unsigned long long>(std::max(claimed_values, 1ll));
-    fits = claimed_points <= (available + 1) / text_per_point &&
-           claimed_bytes <= 8 * available + claimed_step;
-  }
+  // ascii: each point's line holds its values, each at least one character plus a separator (or
+  // the newline; the last line may lack it), and a value is at most 8 bytes in memory.
+  const unsigned long long ascii_text_per_point =
+      2 * static_cast<unsigned long long>(std::max(claimed_values, 1ll));
+  const bool fits = binary       ? claimed_bytes <= available
+                    : compressed ? claimed_bytes <= 88 * available
+                                 : claimed_points <= (available + 1) / ascii_text_per_point &&
+                                       claimed_bytes <= 8 * available + claimed_step;
   if (fits) return;
   std::ostringstream why;
   why << "header claims " << claimed_points << " points of " << claimed_step << " bytes ("
