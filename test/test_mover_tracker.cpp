@@ -165,28 +165,33 @@ TEST(MoverTracker, OccludedMoverIsReacquired) {
 
 // Static objects of all kinds seen from an ego vehicle driving past at 10 m/s: their visible faces
 // (and so their centroids) change a lot, but none may ever be declared a mover.
+// Also with an early-confirmation test 50 times laxer than the default.
 TEST(MoverTracker, StaticObjectsFromMovingEgoAreNeverMovers) {
-  Tracker tracker;
-  tracker.setParameters(defaults());
-  int false_movers = 0;
-  int tracked = 0;
-  for (int k = 0; k < 60; ++k) {
-    const double t = k * 0.1;
-    const Eigen::Vector3d sensor(-30 + 10.0 * t, 0, 1.7);
-    SceneBuilder scene;
-    scene.addBox(sensor, Eigen::Vector2d(0, 6), 0.0, 4.5, 1.8, 1.5);    // parked car
-    scene.addBox(sensor, Eigen::Vector2d(8, -5), 0.3, 5.5, 2.0, 2.2);   // parked van
-    scene.addBox(sensor, Eigen::Vector2d(-6, -4), 0.0, 0.3, 0.3, 3.0);  // pole
-    scene.addBox(sensor, Eigen::Vector2d(15, 7), 0.0, 0.6, 0.6, 1.8);   // standing person
-    scene.addBox(sensor, Eigen::Vector2d(5, 12), 0.0, 20.0, 0.5, 3.0);  // wall
-    const auto results = step(tracker, scene, sensor, t);
-    for (const auto& r : results) {
-      false_movers += r.mover;
-      tracked += r.track_id >= 0;
+  for (const double false_rate : {0.001, 0.05}) {
+    auto params = defaults();
+    params.confirm_false_rate = false_rate;
+    Tracker tracker;
+    tracker.setParameters(params);
+    int false_movers = 0;
+    int tracked = 0;
+    for (int k = 0; k < 60; ++k) {
+      const double t = k * 0.1;
+      const Eigen::Vector3d sensor(-30 + 10.0 * t, 0, 1.7);
+      SceneBuilder scene;
+      scene.addBox(sensor, Eigen::Vector2d(0, 6), 0.0, 4.5, 1.8, 1.5);    // parked car
+      scene.addBox(sensor, Eigen::Vector2d(8, -5), 0.3, 5.5, 2.0, 2.2);   // parked van
+      scene.addBox(sensor, Eigen::Vector2d(-6, -4), 0.0, 0.3, 0.3, 3.0);  // pole
+      scene.addBox(sensor, Eigen::Vector2d(15, 7), 0.0, 0.6, 0.6, 1.8);   // standing person
+      scene.addBox(sensor, Eigen::Vector2d(5, 12), 0.0, 20.0, 0.5, 3.0);  // wall
+      const auto results = step(tracker, scene, sensor, t);
+      for (const auto& r : results) {
+        false_movers += r.mover;
+        tracked += r.track_id >= 0;
+      }
     }
+    EXPECT_EQ(false_movers, 0) << false_rate;
+    EXPECT_GT(tracked, 250);
   }
-  EXPECT_EQ(false_movers, 0);
-  EXPECT_GT(tracked, 250);
 }
 
 // Random clutter everywhere for a long sequence: the number of live tracks stays under the cap
@@ -493,6 +498,7 @@ TEST(MoverTracker, FarPedestrianConfirmedFromPositionScatter) {
   for (const int from_fit : {1, 0}) {
     auto params = defaults();
     params.fast_from_fit = from_fit;
+    params.confirm_false_rate = 0;  // the vote rule alone (early confirmation: its own tests)
     Tracker tracker;
     tracker.setParameters(params);
     const Eigen::Vector3d sensor(0, 0, 1.7);
@@ -575,4 +581,93 @@ TEST(MoverTracker, CopyOwnsItsModels) {
   }
   ASSERT_EQ(copy.getTracks().size(), original.getTracks().size());
   EXPECT_NE(copy.getTracks()[0].model, original.getTracks()[0].model);
+}
+
+// The early-confirmation threshold is the F(2, 2(n-2)) quantile of |v|² / (2 σ_v²): for a static
+// object with white position noise the line fit must exceed it at the stated false-positive rate.
+TEST(MoverTracker, SpeedSignificanceRatioIsTheFQuantile) {
+  EXPECT_TRUE(std::isinf(Tracker::speedSignificanceRatio(2, 0.001)));
+  EXPECT_TRUE(std::isinf(Tracker::speedSignificanceRatio(4, 0.0)));
+  // ν = 2: f = 1/α - 1; ν = 4: f = 2 (1/√α - 1).
+  EXPECT_NEAR(Tracker::speedSignificanceRatio(3, 0.001), std::sqrt(2.0 * 999.0), 1e-9);
+  EXPECT_NEAR(Tracker::speedSignificanceRatio(4, 0.001), std::sqrt(4.0 * (std::sqrt(1000.0) - 1)),
+              1e-9);
+  // More positions: a weaker ratio suffices.
+  EXPECT_GT(Tracker::speedSignificanceRatio(4, 0.001), Tracker::speedSignificanceRatio(6, 0.001));
+  std::mt19937 rng(7);
+  std::normal_distribution<double> noise(0.0, 0.05);
+  for (const std::size_t n : {3u, 4u, 6u}) {
+    const double alpha = 0.02;
+    const double ratio = Tracker::speedSignificanceRatio(n, alpha);
+    const int trials = 20000;
+    int rejected = 0;
+    for (int i = 0; i < trials; ++i) {
+      std::deque<Eigen::Vector3d> history;
+      for (std::size_t k = 0; k < n; ++k) history.emplace_back(noise(rng), noise(rng), 0.1 * k);
+      const auto fit = Tracker::fitVelocity(history, 1e-9);  // σ from the scatter alone
+      rejected += fit.velocity.norm() >= ratio * fit.sigma_v;
+    }
+    // Binomial σ of the rate at 20000 trials: 0.001.
+    EXPECT_NEAR(static_cast<double>(rejected) / trials, alpha, 0.005) << n;
+  }
+}
+
+namespace {
+/** First frame a box moving at `velocity` from `start` (sensor at the origin) is a mover, -1 if
+ * never; `jitter` shifts the whole box randomly each frame (a poorly registered object). */
+int firstMoverFrame(const pcl_movers::DetectorParameters& params, const Eigen::Vector2d& start,
+                    const Eigen::Vector2d& velocity, const Eigen::Vector3d& size, double jitter,
+                    int* points = nullptr) {
+  Tracker tracker;
+  tracker.setParameters(params);
+  const Eigen::Vector3d sensor(0, 0, 1.7);
+  std::mt19937 rng(11);
+  std::normal_distribution<double> shake(0.0, jitter);
+  for (int k = 0; k < 20; ++k) {
+    const double t = 0.1 * k;
+    SceneBuilder scene;
+    Eigen::Vector2d centre = start + velocity * t;
+    if (jitter > 0) centre += Eigen::Vector2d(shake(rng), shake(rng));
+    scene.addBox(sensor, centre, 0.0, size.x(), size.y(), size.z());
+    const auto results = step(tracker, scene, sensor, t);
+    if (points) *points = results[0].features.points;
+    if (results[0].mover) return k;
+  }
+  return -1;
+}
+}  // namespace
+
+// A well-sampled pedestrian at 10 m and a car at 15 m (36 km/h), registered to a few cm: their
+// motion is determined by 3-4 positions, so they are confirmed before the M-of-N rule's 5th update.
+TEST(MoverTracker, WellMeasuredMoverConfirmsEarly) {
+  auto slow = defaults();
+  slow.confirm_false_rate = 0;  // M-of-N rule only
+  const Eigen::Vector3d person(0.6, 0.6, 1.8), car(4.4, 1.8, 1.5);
+  const Eigen::Vector2d walk(0, 1.4), drive(0, 10.0);
+  // Measured: the pedestrian at the 4th update (5th/6th without the early rule), the car at the
+  // 3rd (5th without).
+  EXPECT_GE(firstMoverFrame(slow, {10, -1}, walk, person, 0), 4);
+  EXPECT_LE(firstMoverFrame(defaults(), {10, -1}, walk, person, 0), 3);
+  EXPECT_GE(firstMoverFrame(slow, {15, -6}, drive, car, 0), 4);
+  EXPECT_EQ(firstMoverFrame(defaults(), {15, -6}, drive, car, 0), 2);
+}
+
+// The same pedestrian with 8 cm of frame-to-frame position error (poorly registered views), and
+// a child at 60 m with too few points: the early rule does not apply, they wait for the M-of-N
+// rule.
+TEST(MoverTracker, NoisyOrSparseMoverIsNotConfirmedEarly) {
+  auto slow = defaults();
+  slow.confirm_false_rate = 0;
+  const Eigen::Vector3d person(0.6, 0.6, 1.8);
+  const Eigen::Vector2d walk(0, 1.4);
+  const int noisy = firstMoverFrame(defaults(), {10, -1}, walk, person, 0.08);
+  EXPECT_EQ(noisy, firstMoverFrame(slow, {10, -1}, walk, person, 0.08));
+  EXPECT_TRUE(noisy < 0 || noisy >= 4) << noisy;
+  int points = 0;
+  const Eigen::Vector2d far(60, -2);
+  const Eigen::Vector3d child(0.5, 0.4, 1.3);
+  const int sparse = firstMoverFrame(defaults(), far, walk, child, 0, &points);
+  EXPECT_LT(points, defaults().confirm_min_points);
+  EXPECT_EQ(sparse, firstMoverFrame(slow, far, walk, child, 0));
+  EXPECT_TRUE(sparse < 0 || sparse >= 4) << sparse;
 }

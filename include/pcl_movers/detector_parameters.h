@@ -163,6 +163,25 @@ struct DetectorParameters {
   /// margin_per_metre · distance) [m, m/m] (range noise, pose error, beam footprint).
   double free_space_margin = 0.3;
   double free_space_margin_per_metre = 0.02;
+  /// Early confirmation of well-measured motion (0 = off): a registered track whose measured
+  /// positions determine its velocity beyond doubt need not wait for mover_votes of mover_window
+  /// votes and mover_min_age updates. Its window's least-squares line (σ from the scatter of the
+  /// positions about it, at least confirm_sigma_floor) must be faster than mover_speed and pass an
+  /// F-test of "velocity = 0" at this false-positive rate: |v|² / (2 σ_v²) ≥ F(2, 2(n-2)) quantile,
+  /// i.e. |v| / σ_v ≥ 44.7 / 11.1 / 7.3 / 6.1 at 3 / 4 / 5 / 6 positions. The displacement and
+  /// height tests still apply, and confirm_free_space_votes free-space tests must have passed.
+  double confirm_false_rate = 0.001;
+  /// Lower bound on the position σ of that test [m]: registration errors are not only white noise
+  /// (the sub-cell fit's median error is ~0.02 m), so a line through 3-4 nearly collinear positions
+  /// is not credited with a vanishing σ.
+  double confirm_sigma_floor = 0.02;
+  /// Only tracks whose last update registered with at least this similarity and had at least this
+  /// many points are confirmed early (sparse or poorly matched views keep the M-of-N rule: their
+  /// registrations can jump between partial views consistently enough to look like a line).
+  double confirm_min_similarity = 0.9;
+  int confirm_min_points = 20;
+  /// Free-space tests that must have passed for an early confirmation (free_space_votes otherwise).
+  int confirm_free_space_votes = 1;
   /// Once confirmed, a track stays a mover while it is tracked (1) or is re-decided every update
   /// (0).
   int mover_latch = 1;
@@ -259,6 +278,13 @@ void DetectorParameters::forEachParameter(F&& f) {
   f("free_space_votes", free_space_votes, "passed free-space tests needed to confirm");
   f("free_space_margin", free_space_margin, "seen-through range margin [m]");
   f("free_space_margin_per_metre", free_space_margin_per_metre, "margin per metre of distance");
+  f("confirm_false_rate", confirm_false_rate,
+    "early confirmation: F-test false-positive rate of velocity = 0 (0 = off)");
+  f("confirm_sigma_floor", confirm_sigma_floor, "early confirmation: min position sigma [m]");
+  f("confirm_min_similarity", confirm_min_similarity, "early confirmation: min B of the update");
+  f("confirm_min_points", confirm_min_points, "early confirmation: min points of the cluster");
+  f("confirm_free_space_votes", confirm_free_space_votes,
+    "early confirmation: passed free-space tests needed");
   f("mover_latch", mover_latch, "1 = a confirmed mover stays a mover while tracked");
   f("hold_confirmed", hold_confirmed, "1 = confirmed movers keep low-B clusters (no update)");
 }
@@ -386,6 +412,14 @@ inline void DetectorParameters::validate() const {
   if (free_space_min_points < 1) throw InputError("parameter free_space_min_points must be >= 1");
   if (free_space_margin < 0 || free_space_margin_per_metre < 0)
     throw InputError("parameters free_space_margin(_per_metre) must be >= 0");
+  if (confirm_false_rate < 0 || confirm_false_rate >= 1)
+    throw InputError("parameter confirm_false_rate must be in [0, 1)");
+  positive("confirm_sigma_floor", confirm_sigma_floor);
+  if (confirm_min_similarity < 0 || confirm_min_similarity > 1)
+    throw InputError("parameter confirm_min_similarity must be in [0, 1]");
+  if (confirm_min_points < 1) throw InputError("parameter confirm_min_points must be >= 1");
+  if (confirm_free_space_votes < 1)
+    throw InputError("parameter confirm_free_space_votes must be >= 1");
   if (hold_confirmed != 0 && hold_confirmed != 1)
     throw InputError("parameter hold_confirmed must be 0 or 1");
   if (ground_local_slope != 0 && ground_local_slope != 1)

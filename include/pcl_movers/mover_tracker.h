@@ -55,6 +55,11 @@ namespace pcl_movers {
  *     through (FreeSpaceMap). Static objects cannot produce this evidence, whatever their
  *     registration or segmentation errors, so it rejects the centroid-shift and registration-slip
  *     false alarms the kinematic rules let through;
+ *     Early confirmation (`confirm_false_rate`): a track whose last update registered well
+ *     (B ≥ `confirm_min_similarity`, ≥ `confirm_min_points` points) and whose window's line fit
+ *     rejects "velocity = 0" in an F-test at that false-positive rate (σ from the scatter, at
+ *     least `confirm_sigma_floor`) while being faster than `mover_speed` skips the vote count
+ *     and the minimum age, and needs `confirm_free_space_votes` free-space tests;
  *  7. latching (`mover_latch`): a track decided mover in `mover_window` consecutive updates stays
  *     a mover while its track lives (a car waiting at a light, a pedestrian pausing), unless it
  *     becomes a large structure.
@@ -194,6 +199,12 @@ class MoverTracker {
    * `min_sigma`), and the means and spread a caller needs to restart a filter from the line. */
   static LineFit fitVelocity(const std::deque<Eigen::Vector3d>& history, double min_sigma);
 
+  /** \brief The |v| / σ_v a line fit of `positions` positions must reach for "velocity = 0" to be
+   * rejected at `false_rate`: with σ estimated from the scatter (2 (n - 2) degrees of freedom,
+   * σ_v as LineFit::sigma_v), |v|² / (2 σ_v²) of a static object follows F(2, 2 (n - 2)), whose
+   * quantile has the closed form ν/2 · (false_rate^(-2/ν) - 1). Infinite below 3 positions. */
+  static double speedSignificanceRatio(std::size_t positions, double false_rate);
+
   /** \brief Forgets all tracks. */
   void reset();
 
@@ -237,6 +248,12 @@ class MoverTracker {
   /** \brief Updates the mover flag of a track after an update; `points` are the world points of
    * the cluster just assigned (for the free-space test). */
   void decideMover(Track& track, const std::vector<Eigen::Vector3f>& points) const;
+
+  /** \brief True when the track's motion is well determined enough for an early confirmation
+   * (see DetectorParameters::confirm_false_rate): last update registered with a high B on enough
+   * points, and the line through the window's positions faster than mover_speed and significantly
+   * non-zero. */
+  bool wellMeasuredMotion(const Track& track) const;
 
   /** \brief Free-space evidence of a track: the larger fraction of (a) its current points seen
    * through by the scan `free_space_lag` frames ago and (b) its oldest stored points seen through

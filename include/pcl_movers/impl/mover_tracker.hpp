@@ -237,6 +237,31 @@ typename MoverTracker<PointT>::LineFit MoverTracker<PointT>::fitVelocity(
 }
 
 template <typename PointT>
+double MoverTracker<PointT>::speedSignificanceRatio(std::size_t positions, double false_rate) {
+  if (positions < 3 || !(false_rate > 0) || !(false_rate < 1))
+    return std::numeric_limits<double>::infinity();
+  const double dof = 2.0 * static_cast<double>(positions - 2);
+  // F(2, ν) has the survival function (1 + 2 f / ν)^(-ν/2), so its (1 - α) quantile is closed.
+  const double f = 0.5 * dof * (std::pow(false_rate, -2.0 / dof) - 1.0);
+  return std::sqrt(2.0 * f);
+}
+
+template <typename PointT>
+bool MoverTracker<PointT>::wellMeasuredMotion(const Track& track) const {
+  const auto& p = parameters_;
+  if (!(p.confirm_false_rate > 0) || track.large || !track.model) return false;
+  // B is 0 for centroid updates, so they never qualify; the current view must be a good match of
+  // a well-sampled object (earlier positions' quality shows in the scatter about the line).
+  if (track.similarity < p.confirm_min_similarity || track.features.points < p.confirm_min_points)
+    return false;
+  const LineFit fit = fitVelocity(track.history, p.confirm_sigma_floor);
+  if (!fit.valid) return false;
+  const double speed = fit.velocity.norm();
+  return speed > p.mover_speed &&
+         speed >= speedSignificanceRatio(fit.positions, p.confirm_false_rate) * fit.sigma_v;
+}
+
+template <typename PointT>
 bool MoverTracker<PointT>::freeSpaceEvidence(Track& track,
                                              const std::vector<Eigen::Vector3f>& points) const {
   const auto& p = parameters_;
@@ -277,17 +302,30 @@ void MoverTracker<PointT>::decideMover(Track& track,
   // From the third update only: at the second, the velocity rests on the first association of a
   // newborn track, whose birth cluster is often merged or partial (KITTI 0000: a track born on a
   // merged cluster collected two votes at updates 2-3 and latched as a false alarm).
+  bool free_now = false;  // this update's view passed the free-space test
   if (track.hits >= 3 && !track.fast.empty() && track.fast.back()) {
-    track.free_votes.push_back(freeSpaceEvidence(track, points) ? 1 : 0);
+    free_now = freeSpaceEvidence(track, points);
+    track.free_votes.push_back(free_now ? 1 : 0);
     while (static_cast<int>(track.free_votes.size()) > p.mover_window) track.free_votes.pop_front();
   }
-  if (track.hits < p.mover_min_age) return;
+  // Motion determined beyond doubt by the positions so far skips the vote count and the minimum
+  // age, which only exist to average out noisy velocities (see wellMeasuredMotion()).
+  // Only while the track is young (up to its first full window, mover_window + 1 positions): the
+  // early rule stands in for history a track does not have yet, not for the vote count of an
+  // established one (KITTI 0000: a parked car whose registration slipped by ~1 m over 3 s after
+  // 20 still updates passed the significance test). And the free-space evidence must come from
+  // this update's view: tests stay in free_votes for up to mover_window fast updates, which can be
+  // seconds apart, while the significance test concerns the motion of the last few frames.
+  const bool well_measured = track.hits <= p.mover_window + 1 &&
+                             (free_now || !free_space_map_ || p.free_space_lag <= 0) &&
+                             wellMeasuredMotion(track);
+  if (!well_measured && track.hits < p.mover_min_age) return;
   // The tallest view counts: a cluster's height changes with the view (a van seen from straight
   // behind showed 0.7-0.9 m and its decision flickered around min_mover_height).
   if (track.max_height < p.min_mover_height) return;
   int votes = 0;
   for (const char f : track.fast) votes += f;
-  if (votes < p.mover_votes) return;
+  if (!well_measured && votes < p.mover_votes) return;
   const auto& first = track.history.front();
   const auto& last = track.history.back();
   const double elapsed = last.z() - first.z();
@@ -298,7 +336,9 @@ void MoverTracker<PointT>::decideMover(Track& track,
   // free_space_votes tests with evidence are needed, within the last mover_window tests.
   int free_votes = 0;
   for (const char f : track.free_votes) free_votes += f;
-  if (free_space_map_ && p.free_space_lag > 0 && free_votes < p.free_space_votes) return;
+  const int free_needed =
+      well_measured ? std::min(p.confirm_free_space_votes, p.free_space_votes) : p.free_space_votes;
+  if (free_space_map_ && p.free_space_lag > 0 && free_votes < free_needed) return;
   track.mover = true;
   // Latch only after a steady run of positive decisions: a brief false confirmation (a cluster
   // that jumped to another object) must not become a mover for the rest of the track's life.
