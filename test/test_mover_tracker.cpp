@@ -653,8 +653,8 @@ TEST(MoverTracker, WellMeasuredMoverConfirmsEarly) {
 }
 
 // The same pedestrian with 8 cm of frame-to-frame position error (poorly registered views), and
-// a child at 60 m with too few points: the early rule does not apply, they wait for the M-of-N
-// rule.
+// a child at 60 m seen with fewer points than confirm_min_points: the early rule does not apply,
+// they wait for the M-of-N rule (the child is confirmed early once the bound admits its points).
 TEST(MoverTracker, NoisyOrSparseMoverIsNotConfirmedEarly) {
   auto slow = defaults();
   slow.confirm_false_rate = 0;
@@ -663,11 +663,15 @@ TEST(MoverTracker, NoisyOrSparseMoverIsNotConfirmedEarly) {
   const int noisy = firstMoverFrame(defaults(), {10, -1}, walk, person, 0.08);
   EXPECT_EQ(noisy, firstMoverFrame(slow, {10, -1}, walk, person, 0.08));
   EXPECT_TRUE(noisy < 0 || noisy >= 4) << noisy;
-  int points = 0;
   const Eigen::Vector2d far(60, -2);
   const Eigen::Vector3d child(0.5, 0.4, 1.3);
-  const int sparse = firstMoverFrame(defaults(), far, walk, child, 0, &points);
-  EXPECT_LT(points, defaults().confirm_min_points);
-  EXPECT_EQ(sparse, firstMoverFrame(slow, far, walk, child, 0));
-  EXPECT_TRUE(sparse < 0 || sparse >= 4) << sparse;
+  int points = 0;
+  const int vote_rule = firstMoverFrame(slow, far, walk, child, 0, &points);
+  ASSERT_GE(vote_rule, 4);
+  ASSERT_GE(points, defaults().min_cluster_points);
+  auto sparse = defaults();
+  sparse.confirm_min_points = points + 1;
+  EXPECT_EQ(firstMoverFrame(sparse, far, walk, child, 0), vote_rule);
+  sparse.confirm_min_points = points;
+  EXPECT_LT(firstMoverFrame(sparse, far, walk, child, 0), vote_rule);
 }
