@@ -98,8 +98,9 @@ struct DetectorParameters {
   /// (the tracking filter keeps the range-scaled σ) whose σ, while the track is young (fewer
   /// than manoeuvre_window registered positions) or manoeuvring (a quadratic through its last
   /// manoeuvre_window registered positions has an acceleration above manoeuvre_sigmas times its
-  /// σ), is the scatter of the track's last positions about their line (at least
-  /// registration_sigma), else the range-scaled σ; 0 = the tracking filter's velocity.
+  /// σ) and the registration is confident (B >= registration_stop_similarity), is the scatter of
+  /// the track's last positions about their line (at least registration_sigma), else the
+  /// range-scaled σ; 0 = the tracking filter's velocity.
   int measurement_sigma_from_scatter = 1;
   /// Registered positions of the manoeuvre test (see measurement_sigma_from_scatter).
   int manoeuvre_window = 15;

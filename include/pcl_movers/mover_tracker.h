@@ -265,11 +265,12 @@ class MoverTracker {
 
   /** \brief σ [m] of a registered position `measurement` of `track` at `time` (this measurement
    * is the newest of track.registered): the prior max(registration_sigma,
-   * measurement_sigma_per_metre · `range`), or, while the track is young or manoeuvring (see
+   * measurement_sigma_per_metre · `range`), or, when the registration's B (`similarity`) is
+   * confident and the track young or manoeuvring (see
    * DetectorParameters::measurement_sigma_from_scatter), the scatter of its recent positions
    * (this one included) about their line, at least registration_sigma. */
-  double registeredSigma(const Track& track, const Eigen::Vector3d& measurement, double time,
-                         double range) const;
+  double registeredSigma(const Track& track, const Eigen::Vector3d& measurement, double similarity,
+                         double time, double range) const;
 
   /** \brief Clamps the velocity change of `filter` since `v_before` to `limit` [m/s]. */
   static void limitAcceleration(KalmanFilterCV& filter, const Eigen::Vector2d& v_before,
@@ -277,8 +278,8 @@ class MoverTracker {
 
   /** \brief Records a registered position of `track` (after its tracking filter took it) and
    * updates the track's velocity_filter with it; `since` [s] is the time since the last update. */
-  void updateVelocityFilter(Track& track, const Eigen::Vector3d& measurement, double time,
-                            double range, double since) const;
+  void updateVelocityFilter(Track& track, const Eigen::Vector3d& measurement, double similarity,
+                            double time, double range, double since) const;
 
   /** \brief Updates the mover flag of a track after an update; `points` are the world points of
    * the cluster just assigned (for the free-space test). */

@@ -287,7 +287,8 @@ void MoverTracker<PointT>::limitAcceleration(KalmanFilterCV& filter,
 
 template <typename PointT>
 void MoverTracker<PointT>::updateVelocityFilter(Track& track, const Eigen::Vector3d& measurement,
-                                                double time, double range, double since) const {
+                                                double similarity, double time, double range,
+                                                double since) const {
   const auto& p = parameters_;
   track.registered.emplace_back(measurement.x(), measurement.y(), time);
   while (static_cast<int>(track.registered.size()) > p.manoeuvre_window)
@@ -299,7 +300,7 @@ void MoverTracker<PointT>::updateVelocityFilter(Track& track, const Eigen::Vecto
     track.velocity_filter = track.filter;
     return;
   }
-  const double sigma = registeredSigma(track, measurement, time, range);
+  const double sigma = registeredSigma(track, measurement, similarity, time, range);
   const Eigen::Vector2d v_before = track.velocity_filter.velocity();
   track.velocity_filter.update(measurement.template head<2>(),
                                Eigen::Matrix2d::Identity() * sigma * sigma);
@@ -309,7 +310,7 @@ void MoverTracker<PointT>::updateVelocityFilter(Track& track, const Eigen::Vecto
 
 template <typename PointT>
 double MoverTracker<PointT>::registeredSigma(const Track& track, const Eigen::Vector3d& measurement,
-                                             double time, double range) const {
+                                             double similarity, double time, double range) const {
   const auto& p = parameters_;
   // The range-scaled σ is a bound for far, coarsely sampled objects, not what a registration
   // delivers: the registered positions of a van at 40-80 m scattered by 3-10 cm about their
@@ -317,6 +318,10 @@ double MoverTracker<PointT>::registeredSigma(const Track& track, const Eigen::Ve
   // behind an accelerating van). The track's own scatter measures it, per object and view.
   const double prior = std::max(p.registration_sigma, p.measurement_sigma_per_metre * range);
   if (!p.measurement_sigma_from_scatter) return prior;
+  // A view that matched its model poorly (B below registration_stop_similarity: the object turns,
+  // recedes behind trees, is partly hidden) is placed less precisely than the scatter of the
+  // earlier positions says: it keeps the prior.
+  if (!(similarity >= p.registration_stop_similarity)) return prior;
   // But registrations also slide slowly while the view of an object changes (a car passing the
   // sensor, one emerging from behind another), and a filter that trusts every position follows
   // those slides (open truck ±1.6 m/s). The prior keeps smoothing them once the track is
@@ -647,7 +652,7 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     // vehicle can accelerate (a single bad measurement cannot make a static object a mover).
     if (t.hits >= p.mover_min_age)
       limitAcceleration(t.filter, v_before, p.acceleration_limit * since);
-    if (registered) updateVelocityFilter(t, m.measurement, time, range, since);
+    if (registered) updateVelocityFilter(t, m.measurement, m.similarity, time, range, since);
     t.z = m.measurement.z();
     t.last_time = time;
     ++t.hits;
