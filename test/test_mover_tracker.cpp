@@ -630,6 +630,31 @@ TEST(MoverTracker, AcceleratingTargetVelocityConverges) {
   EXPECT_GT(rms[kUnconfident], 1.2);
 }
 
+// A car seen standing for its first four frames at 55 m (waiting, or its first registrations slid
+// as urban car 4's did), then at 8 m/s: the reported velocity starts 8 m/s off. The acceleration
+// limit bounds how fast the object can change its velocity, not how fast a young filter may
+// correct its own error: a correction within gate_sigmas of the filter's velocity σ is allowed, so
+// the estimate converges in a few updates instead of at 1.2 m/s per frame.
+TEST(MoverTracker, YoungTrackVelocityIsNotHeldByTheAccelerationLimit) {
+  Tracker tracker;
+  tracker.setParameters(defaults());
+  const Eigen::Vector3d sensor(0, 0, 1.7);
+  double error_at_7 = 0;
+  for (int k = 0; k < 12; ++k) {
+    const double t = 0.1 * k;
+    SceneBuilder scene;
+    scene.addBox(sensor, Eigen::Vector2d(55, 6 - 8.0 * std::max(0.0, t - 0.3)), M_PI / 2, 4.5, 1.8,
+                 1.5);
+    const auto results = step(tracker, scene, sensor, t);
+    ASSERT_EQ(results.size(), 1u);
+    const double error = (results[0].velocity - Eigen::Vector2d(0, -8.0)).norm();
+    if (k == 7) error_at_7 = error;
+  }
+  // Under the acceleration limit alone the four moving updates (frames 4-7, all with hits >= 4)
+  // reach 4.8 m/s at most, 3.2 m/s off (measured so); measured 0.8 m/s off.
+  EXPECT_LT(error_at_7, 1.5);
+}
+
 // Hand-computed: four positions at t = 0..3 on x = t² (a = 2 m/s²) plus ε·(-1, 3, -3, 1), which is
 // orthogonal to 1, t and t² (the cubic of equally spaced points): the quadratic is exactly t², the
 // residuals are the perturbation, Σr² = 20ε² over 2·(4 - 3) degrees of freedom, so σ = ε·√10; the
