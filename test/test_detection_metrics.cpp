@@ -353,3 +353,36 @@ TEST(DetectionMetrics, ExtraHitRateOverMovingFramesOnly) {
   EXPECT_NE(pcl_movers::eval::formatJson(s).find("\"extra_mean_moving_hit_rate\": 0.8333"),
             std::string::npos);
 }
+
+TEST(DetectionMetrics, FirstReportedCountsLabelledFramesOutsideTheScoredSector) {
+  // A pedestrian labelled in frames 0-5 walks out of the 40 deg sector after frame 3 (like KITTI
+  // 0000-a's): it is scored in frames 0-3 only, but a mover row at frame 5 reports it.
+  std::vector<GroundTruthObject> objects;
+  std::vector<TrackRow> tracks;
+  for (int f = 0; f < 6; ++f) {
+    const double x = 9.0 - 0.3 * f, y = -6.3 - 0.15 * f;  // -35 deg .. -43 deg
+    objects.push_back(object(f, 2, x, y, true, 300, 0.0, "Pedestrian"));
+    if (f >= 5) tracks.push_back(row(f, 36, x, y));
+  }
+  tracks.push_back(row(5, 40, 30.0, 0.0));  // a mover elsewhere: not on the target
+  auto s = scoreDetections(objects, tracks);
+  ASSERT_EQ(s.targets.size(), 1u);
+  EXPECT_EQ(s.targets[0].visible_frames, 4);
+  EXPECT_EQ(s.targets[0].hits, 0);
+  EXPECT_EQ(s.targets[0].first_reported, 5);
+  EXPECT_FALSE(s.targets[0].first_reported_visible);
+  EXPECT_NE(pcl_movers::eval::formatMarkdown(s).find("5 (not scored there)"), std::string::npos);
+  EXPECT_NE(pcl_movers::eval::formatJson(s).find("\"first_reported\": 5"), std::string::npos);
+
+  // Reported inside the sector: the first hit is the first report.
+  tracks.push_back(row(2, 36, objects[2].center.x(), objects[2].center.y()));
+  s = scoreDetections(objects, tracks);
+  EXPECT_EQ(s.targets[0].first_reported, 2);
+  EXPECT_TRUE(s.targets[0].first_reported_visible);
+  EXPECT_EQ(s.targets[0].first_hit, 2);
+
+  // Never reported.
+  tracks.clear();
+  s = scoreDetections(objects, tracks);
+  EXPECT_EQ(s.targets[0].first_reported, -1);
+}

@@ -96,6 +96,18 @@ struct DetectorParameters {
   double centroid_sigma = 0.3;
   /// Position σ grows with range: σ = max(base σ, this · range) [m per m of range].
   double measurement_sigma_per_metre = 0.01;
+  /// Reported velocity (registration mode): 1 = from a second filter on the registered positions
+  /// (the tracking filter keeps the range-scaled σ) whose σ, while the track is young (fewer
+  /// than manoeuvre_window registered positions) or manoeuvring (a quadratic through its last
+  /// manoeuvre_window registered positions has an acceleration above manoeuvre_sigmas times its
+  /// σ) and the registration is confident (B >= registration_stop_similarity), is the scatter of
+  /// the track's last positions about their line (at least registration_sigma), else the
+  /// range-scaled σ; 0 = the tracking filter's velocity.
+  int measurement_sigma_from_scatter = 1;
+  /// Registered positions of the manoeuvre test (see measurement_sigma_from_scatter).
+  int manoeuvre_window = 15;
+  /// Significance of the acceleration of the manoeuvre test [σ].
+  double manoeuvre_sigmas = 4.0;
   /// Static tracks (slow, established, one still candidate) are registered every this many
   /// frames only; 1 = every frame (the paper's).
   int static_refresh_frames = 4;
@@ -251,6 +263,10 @@ void DetectorParameters::forEachParameter(F&& f) {
   f("centroid_sigma", centroid_sigma, "sigma of a centroid position [m]");
   f("measurement_sigma_per_metre", measurement_sigma_per_metre,
     "position sigma per metre of range");
+  f("measurement_sigma_from_scatter", measurement_sigma_from_scatter,
+    "1 = reported velocity from a filter with sigma from the track's scatter");
+  f("manoeuvre_window", manoeuvre_window, "registered positions of the manoeuvre test");
+  f("manoeuvre_sigmas", manoeuvre_sigmas, "manoeuvre: acceleration significance [sigma]");
   f("static_refresh_frames", static_refresh_frames, "register still static tracks every N frames");
   f("static_shift", static_shift, "max centroid shift of a still static track [m]");
   f("static_clearance", static_clearance,
@@ -429,6 +445,10 @@ inline void DetectorParameters::validate() const {
     throw InputError("parameter hold_confirmed must be 0 or 1");
   if (ground_local_slope != 0 && ground_local_slope != 1)
     throw InputError("parameter ground_local_slope must be 0 or 1");
+  if (measurement_sigma_from_scatter != 0 && measurement_sigma_from_scatter != 1)
+    throw InputError("parameter measurement_sigma_from_scatter must be 0 or 1");
+  if (manoeuvre_window < 4) throw InputError("parameter manoeuvre_window must be >= 4");
+  positive("manoeuvre_sigmas", manoeuvre_sigmas);
   if (velocity_fit_init != 0 && velocity_fit_init != 1)
     throw InputError("parameter velocity_fit_init must be 0 or 1");
   if (fast_from_fit != 0 && fast_from_fit != 1)

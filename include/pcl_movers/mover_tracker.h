@@ -123,7 +123,19 @@ class MoverTracker {
     double max_height = 0;
     std::deque<char> fast;                ///< speed > mover_speed after each of the last updates
     std::deque<Eigen::Vector3d> history;  ///< (x, y, time) of the last measurements
-    SurfaceDensity::Ptr model;            ///< accumulated surface density (registration mode)
+    /// (x, y, time) of the last registered measurements (manoeuvre_window of them), for the
+    /// manoeuvre test of registeredSigma().
+    std::deque<Eigen::Vector3d> registered;
+    /// Reported velocity (registration mode): a second constant-velocity filter on the registered
+    /// positions whose σ follows the registrations (registeredSigma()), while `filter`, which
+    /// gates, searches and decides, keeps the conservative range-scaled σ. Uninitialized until
+    /// the first registered update (or with measurement_sigma_from_scatter = 0).
+    KalmanFilterCV velocity_filter;
+    /// The velocity reported for the track: velocity_filter's once initialized, else filter's.
+    Eigen::Vector2d reportedVelocity() const {
+      return velocity_filter.isInitialized() ? velocity_filter.velocity() : filter.velocity();
+    }
+    SurfaceDensity::Ptr model;   ///< accumulated surface density (registration mode)
     int since_registration = 0;  ///< cheap (unregistered) frames since the last registration
     bool confirmed = false;      ///< latched mover (see mover_latch)
     int mover_run = 0;           ///< consecutive updates decided mover (latched after mover_window)
@@ -205,6 +217,23 @@ class MoverTracker {
    * quantile has the closed form ν/2 · (false_rate^(-2/ν) - 1). Infinite below 3 positions. */
   static double speedSignificanceRatio(std::size_t positions, double false_rate);
 
+  /** \brief Least-squares quadratic through measured positions (x, y, time), see
+   * fitAcceleration(). */
+  struct QuadraticFit {
+    bool valid = false;  ///< false with fewer than 4 positions or a degenerate time spread
+    Eigen::Vector2d acceleration = Eigen::Vector2d::Zero();  ///< second derivative [m/s²]
+    /// σ of the acceleration per axis, from `sigma`; infinite when not valid.
+    double sigma_a = std::numeric_limits<double>::infinity();
+    /// σ of one position about the quadratic per axis (the scatter, at least the floor) [m].
+    double sigma = std::numeric_limits<double>::infinity();
+  };
+
+  /** \brief Least-squares quadratic `p + v·τ + a·τ²/2` through measured positions (x, y, time):
+   * its acceleration and the acceleration's σ (per axis) from the scatter of the positions about
+   * the quadratic (at least `min_sigma`). */
+  static QuadraticFit fitAcceleration(const std::deque<Eigen::Vector3d>& positions,
+                                      double min_sigma);
+
   /** \brief Forgets all tracks. */
   void reset();
 
@@ -244,6 +273,24 @@ class MoverTracker {
   /** \brief Builds a track's first model from its birth cluster. */
   SurfaceDensity::Ptr makeModel(const Candidate& candidate,
                                 const Eigen::Vector3d& sensor_origin) const;
+
+  /** \brief σ [m] of a registered position `measurement` of `track` at `time` (this measurement
+   * is the newest of track.registered): the prior max(registration_sigma,
+   * measurement_sigma_per_metre · `range`), or, when the registration's B (`similarity`) is
+   * confident and the track young or manoeuvring (see
+   * DetectorParameters::measurement_sigma_from_scatter), the scatter of its recent positions
+   * (this one included) about their line, at least registration_sigma. */
+  double registeredSigma(const Track& track, const Eigen::Vector3d& measurement, double similarity,
+                         double time, double range) const;
+
+  /** \brief Clamps the velocity change of `filter` since `v_before` to `limit` [m/s]. */
+  static void limitAcceleration(KalmanFilterCV& filter, const Eigen::Vector2d& v_before,
+                                double limit);
+
+  /** \brief Records a registered position of `track` (after its tracking filter took it) and
+   * updates the track's velocity_filter with it; `since` [s] is the time since the last update. */
+  void updateVelocityFilter(Track& track, const Eigen::Vector3d& measurement, double similarity,
+                            double time, double range, double since) const;
 
   /** \brief Updates the mover flag of a track after an update; `points` are the world points of
    * the cluster just assigned (for the free-space test). */

@@ -148,9 +148,17 @@ DetectionScore scoreDetections(const std::vector<io::GroundTruthObject>& objects
     const auto& movers = mit == movers_by_frame.end() ? kNone : mit->second;
     for (const auto* o : frame_objects.second) {
       if (!o->moving) continue;
-      if (o->n_points < params.min_points) continue;
-      if (!inSector(o->center.x(), o->center.y(), params.sector_deg)) continue;
       auto& t = targets[o->track_id];
+      const bool visible = o->n_points >= params.min_points &&
+                           inSector(o->center.x(), o->center.y(), params.sector_deg);
+      if (t.first_reported < 0)
+        for (const auto* r : movers)
+          if (o->contains(Eigen::Vector3d(r->x, r->y, r->z), params.grow_xy, params.grow_z)) {
+            t.first_reported = frame;  // frames are visited in increasing order
+            t.first_reported_visible = visible;
+            break;
+          }
+      if (!visible) continue;
       ++t.visible_frames;
       const bool moving_now = o->speed >= params.moving_speed;
       if (moving_now) ++t.moving_frames;
@@ -258,14 +266,18 @@ std::string formatMarkdown(const DetectionScore& score) {
   std::ostringstream out;
   out << "| target | class | visible frames | hits | hit % | delay [frames] | RMS vel. err [m/s] "
          "| extra: hit % while moving ≥ "
-      << fmt(score.moving_speed, 1) << " m/s (frames) |\n"
-      << "|---:|---|---:|---:|---:|---:|---:|---:|\n";
+      << fmt(score.moving_speed, 1) << " m/s (frames) | extra: first reported [frame] |\n"
+      << "|---:|---|---:|---:|---:|---:|---:|---:|---|\n";
   for (const auto& t : score.targets)
     out << "| " << t.track_id << " | " << t.type << " | " << t.visible_frames << " | " << t.hits
         << " | " << fmt(100.0 * t.hitRate(), 1) << " | "
         << (t.delay >= 0 ? std::to_string(t.delay) : std::string(t.visible_frames ? "never" : "—"))
         << " | " << fmt(t.rms_velocity_error, 3) << " | " << fmt(100.0 * t.movingHitRate(), 1)
-        << " (" << t.moving_frames << ") |\n";
+        << " (" << t.moving_frames << ") | "
+        << (t.first_reported < 0 ? std::string("never")
+                                 : std::to_string(t.first_reported) +
+                                       (t.first_reported_visible ? "" : " (not scored there)"))
+        << " |\n";
   out << "\n| total | value |\n|---|---:|\n"
       << "| targets (visible) | " << score.targets.size() << " ("
       << std::count_if(score.targets.begin(), score.targets.end(),
@@ -311,6 +323,8 @@ std::string formatJson(const DetectionScore& score) {
         << ", \"delay\": " << (t.delay >= 0 ? std::to_string(t.delay) : "null")
         << ", \"rms_velocity_error\": " << jsonNumber(t.rms_velocity_error)
         << ", \"velocity_samples\": " << t.velocity_samples
+        << ", \"first_reported\": " << t.first_reported
+        << ", \"first_reported_visible\": " << (t.first_reported_visible ? "true" : "false")
         << ", \"extra_moving_frames\": " << t.moving_frames
         << ", \"extra_moving_hit_rate\": " << jsonNumber(t.movingHitRate()) << "}";
   }

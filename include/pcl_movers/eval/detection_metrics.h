@@ -51,6 +51,13 @@ struct TargetScore {
   int hits = 0;
   int first_visible = -1;  ///< frame, -1 when never visible
   int first_hit = -1;      ///< frame, -1 when never hit
+  /** \brief First frame in which a `mover` row lies in the target's grown box, counting every
+   * labelled frame of the target (outside the scored sector and under min_points too); -1 when
+   * never. Not a DESIGN metric: it tells whether a target was reported at all, e.g. KITTI's
+   * pedestrian, labelled for 6 frames of which only the first 4 fall inside the ±40° sector. */
+  int first_reported = -1;
+  /** \brief Whether the first_reported frame was a visible (scored) one. */
+  bool first_reported_visible = false;
   /** \brief first_hit - first_visible [frames]; -1 when never hit. */
   int delay = -1;
   /** \brief RMS velocity error over hits with a ground-truth velocity [m/s]; NaN when none. */
