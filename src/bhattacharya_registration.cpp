@@ -199,57 +199,17 @@ void buildSourceLayer(SourceLayer& layer, const std::vector<Eigen::Vector3f>& po
   buildSourceLayer(layer, points, sigmas, sigmas, kNoWeights, target, nr, nrz);
 }
 
-void buildSourceLayer(SourceLayer& layer, const std::vector<Eigen::Vector3f>& points,
-                      const std::vector<float>& sigmas_xy, const std::vector<float>& sigmas_z,
-                      const std::vector<float>& weights, const SurfaceDensity& target, int nr,
-                      int nrz) {
-  const int nx = target.getNx(), ny = target.getNy(), nz = target.getNz();
-  const float res = target.getResolution(), res_z = target.getResolutionZ();
-  const Eigen::Vector3f tlo =
-      target.getCentre() - 0.5f * Eigen::Vector3f(nx * res, ny * res, nz * res_z);
-  Eigen::Vector3f lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
-  Eigen::Vector3f hi = -lo;
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    const Eigen::Vector3f reach(3.f * sigmas_xy[i], 3.f * sigmas_xy[i], 3.f * sigmas_z[i]);
-    lo = lo.cwiseMin(points[i] - reach);
-    hi = hi.cwiseMax(points[i] + reach);
-  }
+namespace {
+/** The non-zero cells of a freshly computed layer density, as lists (see SourceLayer). */
+void indexNonZero(SourceLayer& layer) {
   layer.nonzero.clear();
   layer.row_y.clear();
   layer.row_z.clear();
   layer.row_begin.clear();
   layer.cell_x.clear();
   layer.cell_v.clear();
-  // Cells of the target lattice covered by the Gaussians, clipped to those that can overlap
-  // the target for some searched shift (the rest never contributes).
-  auto cellRange = [](float a, float b, float origin, float cell, int lo_lim, int hi_lim,
-                      int& first, int& last) {
-    const float fa = std::floor((a - origin) / cell), fb = std::floor((b - origin) / cell);
-    first = static_cast<int>(std::max(fa, static_cast<float>(lo_lim)));
-    last = static_cast<int>(std::min(fb, static_cast<float>(hi_lim)));
-  };
-  int ax, bx, ay, by, az, bz;
-  cellRange(lo.x(), hi.x(), tlo.x(), res, -nr, nx - 1 + nr, ax, bx);
-  cellRange(lo.y(), hi.y(), tlo.y(), res, -nr, ny - 1 + nr, ay, by);
-  cellRange(lo.z(), hi.z(), tlo.z(), res_z, -nrz, nz - 1 + nrz, az, bz);
-  if (points.empty() || bx < ax || by < ay || bz < az) {
-    layer.density.clear();
-    layer.ox = layer.oy = layer.oz = 0;
-    return;
-  }
-  const int sx = bx - ax + 1, sy = by - ay + 1, sz = bz - az + 1;
-  SurfaceDensity& d = layer.density;
-  if (d.getNx() != sx || d.getNy() != sy || d.getNz() != sz) d.setGridSize(sx, sy, sz);
-  d.setResolution(res);
-  d.setResolutionZ(res_z);
-  layer.ox = ax;
-  layer.oy = ay;
-  layer.oz = az;
-  // Lower corner of the tight grid = lower corner of target cell (ax, ay, az).
-  const Eigen::Vector3f centre =
-      tlo +
-      Eigen::Vector3f((ax + 0.5f * sx) * res, (ay + 0.5f * sy) * res, (az + 0.5f * sz) * res_z);
-  d.computeFromGaussians(points, sigmas_xy, sigmas_z, weights, centre);
+  const SurfaceDensity& d = layer.density;
+  const int sx = d.getNx(), sy = d.getNy(), sz = d.getNz();
   const std::vector<float>& sq = d.sqrtValues();
   for (int z = 0, i = 0; z < sz; ++z)
     for (int y = 0; y < sy; ++y) {
@@ -267,6 +227,124 @@ void buildSourceLayer(SourceLayer& layer, const std::vector<Eigen::Vector3f>& po
       layer.row_begin.push_back(static_cast<int>(before));
     }
   layer.row_begin.push_back(static_cast<int>(layer.cell_x.size()));
+}
+
+void clearLayer(SourceLayer& layer) {
+  layer.density.clear();
+  layer.ox = layer.oy = layer.oz = 0;
+  layer.nonzero.clear();
+  layer.row_y.clear();
+  layer.row_z.clear();
+  layer.row_begin.assign(1, 0);
+  layer.cell_x.clear();
+  layer.cell_v.clear();
+}
+}  // namespace
+
+void buildSourceLayer(SourceLayer& layer, const std::vector<Eigen::Vector3f>& points,
+                      const std::vector<float>& sigmas_xy, const std::vector<float>& sigmas_z,
+                      const std::vector<float>& weights, const SurfaceDensity& target, int nr,
+                      int nrz) {
+  const int nx = target.getNx(), ny = target.getNy(), nz = target.getNz();
+  const float res = target.getResolution(), res_z = target.getResolutionZ();
+  const Eigen::Vector3f tlo =
+      target.getCentre() - 0.5f * Eigen::Vector3f(nx * res, ny * res, nz * res_z);
+  Eigen::Vector3f lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
+  Eigen::Vector3f hi = -lo;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3f reach(3.f * sigmas_xy[i], 3.f * sigmas_xy[i], 3.f * sigmas_z[i]);
+    lo = lo.cwiseMin(points[i] - reach);
+    hi = hi.cwiseMax(points[i] + reach);
+  }
+  // Cells of the target lattice covered by the Gaussians, clipped to those that can overlap
+  // the target for some searched shift (the rest never contributes).
+  auto cellRange = [](float a, float b, float origin, float cell, int lo_lim, int hi_lim,
+                      int& first, int& last) {
+    const float fa = std::floor((a - origin) / cell), fb = std::floor((b - origin) / cell);
+    first = static_cast<int>(std::max(fa, static_cast<float>(lo_lim)));
+    last = static_cast<int>(std::min(fb, static_cast<float>(hi_lim)));
+  };
+  int ax, bx, ay, by, az, bz;
+  cellRange(lo.x(), hi.x(), tlo.x(), res, -nr, nx - 1 + nr, ax, bx);
+  cellRange(lo.y(), hi.y(), tlo.y(), res, -nr, ny - 1 + nr, ay, by);
+  cellRange(lo.z(), hi.z(), tlo.z(), res_z, -nrz, nz - 1 + nrz, az, bz);
+  if (points.empty() || bx < ax || by < ay || bz < az) {
+    clearLayer(layer);
+    return;
+  }
+  const int sx = bx - ax + 1, sy = by - ay + 1, sz = bz - az + 1;
+  SurfaceDensity& d = layer.density;
+  if (d.getNx() != sx || d.getNy() != sy || d.getNz() != sz) d.setGridSize(sx, sy, sz);
+  d.setResolution(res);
+  d.setResolutionZ(res_z);
+  layer.ox = ax;
+  layer.oy = ay;
+  layer.oz = az;
+  // Lower corner of the tight grid = lower corner of target cell (ax, ay, az).
+  const Eigen::Vector3f centre =
+      tlo +
+      Eigen::Vector3f((ax + 0.5f * sx) * res, (ay + 0.5f * sy) * res, (az + 0.5f * sz) * res_z);
+  d.computeFromGaussians(points, sigmas_xy, sigmas_z, weights, centre);
+  indexNonZero(layer);
+}
+
+void prepareSource(SurfaceDensity::PreparedGaussians& prepared,
+                   const std::vector<Eigen::Vector3f>& points, const std::vector<float>& sigmas_xy,
+                   const std::vector<float>& sigmas_z, const std::vector<float>& weights,
+                   const SurfaceDensity& target, int nrz, float z_shift) {
+  const float res_z = target.getResolutionZ();
+  // Lattice cell 0 of the target; a shift of the points is a shift of the lattice the other way.
+  const float z0 = target.getCentre().z() - 0.5f * static_cast<float>(target.getNz()) * res_z;
+  SurfaceDensity::prepareGaussians(points, sigmas_xy, sigmas_z, weights, target.getResolution(),
+                                   res_z, z0 - z_shift, -nrz, target.getNz() - 1 + nrz, prepared);
+}
+
+void buildSourceLayer(SourceLayer& layer, const std::vector<Eigen::Vector3f>& points,
+                      const SurfaceDensity::PreparedGaussians& prepared,
+                      const SurfaceDensity& target, int nr, int nrz) {
+  const int nx = target.getNx(), ny = target.getNy(), nz = target.getNz();
+  const float res = target.getResolution(), res_z = target.getResolutionZ();
+  const float tx = target.getCentre().x() - 0.5f * static_cast<float>(nx) * res;
+  const float ty = target.getCentre().y() - 0.5f * static_cast<float>(ny) * res;
+  const float inv_res = 1.f / res;
+  // Horizontal reach in cells of the target lattice (the ±3σ windows), vertical from the
+  // preparation.
+  float lx = std::numeric_limits<float>::max(), ly = lx, hx = -lx, hy = -lx;
+  for (std::size_t k = 0; k < prepared.index.size(); ++k) {
+    const Eigen::Vector3f& p = points[static_cast<std::size_t>(prepared.index[k])];
+    const float u = (p.x() - tx) * inv_res, v = (p.y() - ty) * inv_res, r = prepared.reach_xy[k];
+    lx = std::min(lx, u - r);
+    hx = std::max(hx, u + r);
+    ly = std::min(ly, v - r);
+    hy = std::max(hy, v + r);
+  }
+  const int az = std::max(prepared.z_min, -nrz), bz = std::min(prepared.z_max, nz - 1 + nrz);
+  auto clip = [](float a, float b, int lo_lim, int hi_lim, int& first, int& last) {
+    first = static_cast<int>(std::max(std::floor(a), static_cast<float>(lo_lim)));
+    last = static_cast<int>(std::min(std::floor(b), static_cast<float>(hi_lim)));
+  };
+  int ax = 0, bx = -1, ay = 0, by = -1;
+  if (!prepared.empty()) {
+    clip(lx, hx, -nr, nx - 1 + nr, ax, bx);
+    clip(ly, hy, -nr, ny - 1 + nr, ay, by);
+  }
+  if (prepared.empty() || bx < ax || by < ay || bz < az) {
+    clearLayer(layer);
+    return;
+  }
+  const int sx = bx - ax + 1, sy = by - ay + 1, sz = bz - az + 1;
+  SurfaceDensity& d = layer.density;
+  if (d.getNx() != sx || d.getNy() != sy || d.getNz() != sz) d.setGridSize(sx, sy, sz);
+  d.setResolution(res);
+  d.setResolutionZ(res_z);
+  layer.ox = ax;
+  layer.oy = ay;
+  layer.oz = az;
+  const Eigen::Vector3f centre(tx + (static_cast<float>(ax) + 0.5f * sx) * res,
+                               ty + (static_cast<float>(ay) + 0.5f * sy) * res,
+                               prepared.z0 + (static_cast<float>(az) + 0.5f * sz) * res_z);
+  d.computeFromPrepared(prepared, points, centre);
+  indexNonZero(layer);
 }
 
 namespace {

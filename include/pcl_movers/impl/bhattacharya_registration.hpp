@@ -71,6 +71,10 @@ struct BhattacharyaWorkspace {
   std::vector<Eigen::Vector3f> target_points, target_gauss_points;
   std::vector<float> target_sigmas, target_sigmas_xy, target_sigmas_z, target_weights;
   std::vector<SourceLayer> layers;
+  // The source's Gaussians prepared on the target's vertical lattice, for the z shift
+  // prepared_shift (a search on a new target or z shift prepares again).
+  SurfaceDensity::PreparedGaussians prepared;
+  float prepared_shift = 0.f;
   SourceLayer refine[3];
   std::vector<float> scores, block, local;
   // Occlusion pass (setSourceOccluders() / setTargetOccluders()).
@@ -100,6 +104,19 @@ void buildSourceLayer(SourceLayer& layer, const std::vector<Eigen::Vector3f>& po
                       const std::vector<float>& sigmas_xy, const std::vector<float>& sigmas_z,
                       const std::vector<float>& weights, const SurfaceDensity& target, int nr,
                       int nrz);
+
+/** \brief `prepared` ← the Gaussians prepared (SurfaceDensity::prepareGaussians()) on the
+ * target's vertical lattice, clipped to the cells reached by shifts of ±nrz cells, for points
+ * moved up by z_shift [m]. */
+void prepareSource(SurfaceDensity::PreparedGaussians& prepared,
+                   const std::vector<Eigen::Vector3f>& points, const std::vector<float>& sigmas_xy,
+                   const std::vector<float>& sigmas_z, const std::vector<float>& weights,
+                   const SurfaceDensity& target, int nrz, float z_shift);
+/** \brief buildSourceLayer() from prepared Gaussians at the horizontal positions of `points`
+ * (indexed as when prepared): two axes per Gaussian instead of three. */
+void buildSourceLayer(SourceLayer& layer, const std::vector<Eigen::Vector3f>& points,
+                      const SurfaceDensity::PreparedGaussians& prepared,
+                      const SurfaceDensity& target, int nr, int nrz);
 
 /** \brief B(d) = Σ_j sqrt(S[j])·sqrt(T[j + o + d]) for d in [dx0,dx1]×[dy0,dy1]×[dz0,dz1],
  * summed directly over the non-zero source cells; out[((dz-dz0)·h + dy-dy0)·w + dx-dx0]. */
@@ -441,9 +458,19 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::search(
                                  w.gauss_sigmas_xy, w.gauss_sigmas_z, w.gauss_weights);
   std::vector<Eigen::Vector3f>& turned = w.turned;
   turned.resize(gauss.size());
-  auto buildLayer = [&](detail::SourceLayer& layer, int r, int rz) {
-    detail::buildSourceLayer(layer, turned, w.gauss_sigmas_xy, w.gauss_sigmas_z, w.gauss_weights,
-                             target, r, rz);
+  int nrz_prepare = 0;
+  // Rotations about z and horizontal shifts leave every Gaussian's vertical cell weights as
+  // they are: they are computed once per search (and z shift), each layer below only evaluates
+  // the two horizontal axes.
+  bool prepared_valid = false;
+  auto buildLayer = [&](detail::SourceLayer& layer, int r, int rz, float z_shift) {
+    if (!prepared_valid || z_shift != w.prepared_shift) {
+      detail::prepareSource(w.prepared, gauss, w.gauss_sigmas_xy, w.gauss_sigmas_z, w.gauss_weights,
+                            target, nrz_prepare, z_shift);
+      w.prepared_shift = z_shift;
+      prepared_valid = true;
+    }
+    detail::buildSourceLayer(layer, turned, w.prepared, target, r, rz);
   };
 
   // ---- search window: translations d of ±nr cells (±nrz in z) around the guess
@@ -451,6 +478,7 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::search(
   const int nrz =
       search_z_ ? std::max(1, static_cast<int>(std::ceil(search_radius_z_ / res_z - 1e-4f))) : 0;
   const int wx = 2 * nr + 1, wz = 2 * nrz + 1;
+  nrz_prepare = nrz;
   const int layers = yaw_samples_ % 2 == 1 ? yaw_samples_ : yaw_samples_ + 1;
   const int mid = (layers - 1) / 2;
   if (static_cast<int>(w.layers.size()) < layers) w.layers.resize(static_cast<std::size_t>(layers));
@@ -463,7 +491,7 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::search(
   };
   for (int l = 0; l < layers; ++l) {
     place(static_cast<float>(l - mid) * yaw_step_, Eigen::Vector3f::Zero());
-    buildLayer(w.layers[static_cast<std::size_t>(l)], nr, nrz);
+    buildLayer(w.layers[static_cast<std::size_t>(l)], nr, nrz, 0.f);
   }
 
   // scores[((l·wz + dz+nrz)·wx + dy+nr)·wx + dx+nr] = B(d) of layer l; -1: not evaluated.
@@ -593,7 +621,7 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::search(
     for (int k = 0; k < rl; ++k) {
       place(yaw + static_cast<float>(k - (rl - 1) / 2) * yaw_step_,
             Eigen::Vector3f(dx * res, dy * res, dz * res_z));
-      buildLayer(w.refine[k], 1, rz);
+      buildLayer(w.refine[k], 1, rz, dz * res_z);
       detail::correlateDirect(target, w.refine[k], -1, 1, -1, 1, -rz, rz,
                               &w.local[static_cast<std::size_t>(k) * (2 * rz + 1) * 9]);
     }
@@ -650,8 +678,13 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::search(
     sd.setResolutionZ(res_z);
     sd.setSigmaPerMetre(target.getSigmaPerMetre());
     sd.setMinSigma(target.getMinSigma());
-    sd.computeFromGaussians(turned, w.gauss_sigmas_xy, w.gauss_sigmas_z, w.gauss_weights,
-                            target.getCentre());
+    const float z_shift = dz * res_z;
+    if (!prepared_valid || z_shift != w.prepared_shift) {
+      detail::prepareSource(w.prepared, gauss, w.gauss_sigmas_xy, w.gauss_sigmas_z, w.gauss_weights,
+                            target, nrz, z_shift);
+      w.prepared_shift = z_shift;
+    }
+    sd.computeFromPrepared(w.prepared, turned, target.getCentre());
     keep_source_density = true;
   }
   finish();
