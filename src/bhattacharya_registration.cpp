@@ -359,7 +359,13 @@ struct PaddedTarget {
 };
 
 const float* paddedRows(const SurfaceDensity& target, int pad, int& stride) {
-  thread_local PaddedTarget p;
+  // Two entries: the coarse-to-fine search alternates between the target and its binned copy.
+  thread_local PaddedTarget cache[2];
+  thread_local int last_used = 0;
+  int slot = cache[0].revision == target.revision() ? 0 : 1;
+  if (cache[slot].revision != target.revision()) slot = 1 - last_used;
+  last_used = slot;
+  PaddedTarget& p = cache[slot];
   const int nx = target.getNx(), ny = target.getNy(), nz = target.getNz();
   if (p.revision != target.revision() || p.pad < pad) {
     // Round up: windows of a few sizes alternate (layers, blocks, refinement).
@@ -441,6 +447,37 @@ void correlateDirect(const SurfaceDensity& target, const SourceLayer& src, int d
         }
       }
   }
+}
+
+namespace {
+int floorDiv2(int v) {
+  return v >= 0 ? v / 2 : -((1 - v) / 2);
+}
+}  // namespace
+
+void binLayer(const SurfaceDensity& fine, int ox, int oy, int oz, SourceLayer& coarse) {
+  const int fx = fine.getNx(), fy = fine.getNy(), fz = fine.getNz();
+  const int cx0 = floorDiv2(ox), cy0 = floorDiv2(oy);
+  const int cnx = floorDiv2(ox + fx - 1) - cx0 + 1, cny = floorDiv2(oy + fy - 1) - cy0 + 1;
+  SurfaceDensity& d = coarse.density;
+  if (d.getNx() != cnx || d.getNy() != cny || d.getNz() != fz) d.setGridSize(cnx, cny, fz);
+  d.setResolution(2.f * fine.getResolution());
+  d.setResolutionZ(fine.getResolutionZ());
+  thread_local std::vector<float> sum;
+  sum.assign(static_cast<std::size_t>(cnx) * cny * fz, 0.f);
+  const std::vector<float>& v = fine.values();
+  for (int z = 0, i = 0; z < fz; ++z)
+    for (int y = 0; y < fy; ++y) {
+      float* row =
+          sum.data() + (static_cast<std::size_t>(z) * cny + (floorDiv2(oy + y) - cy0)) * cnx;
+      for (int x = 0; x < fx; ++x, ++i)
+        row[floorDiv2(ox + x) - cx0] += v[static_cast<std::size_t>(i)];
+    }
+  d.setValues(sum);
+  coarse.ox = cx0;
+  coarse.oy = cy0;
+  coarse.oz = oz;
+  indexNonZero(coarse);
 }
 
 /** FFT plans, buffers and the cached spectra of the last target. 2-D transforms of the

@@ -76,6 +76,11 @@ struct BhattacharyaWorkspace {
   SurfaceDensity::PreparedGaussians prepared;
   float prepared_shift = 0.f;
   SourceLayer refine[3];
+  // Coarse-to-fine search (setCoarseToFine()): the binned middle layer and target, and the
+  // fine-target revision the binned target was made from.
+  SourceLayer coarse_source, coarse_target;
+  std::uint64_t coarse_target_of = 0;
+  std::vector<float> coarse_scores;
   std::vector<float> scores, block, local;
   // Occlusion pass (setSourceOccluders() / setTargetOccluders()).
   ShadowImage source_shadow, target_shadow;
@@ -117,6 +122,12 @@ void prepareSource(SurfaceDensity::PreparedGaussians& prepared,
 void buildSourceLayer(SourceLayer& layer, const std::vector<Eigen::Vector3f>& points,
                       const SurfaceDensity::PreparedGaussians& prepared,
                       const SurfaceDensity& target, int nr, int nrz);
+
+/** \brief `coarse` ← the density `fine` (whose cell (0, 0, 0) is cell (ox, oy, oz) of a lattice)
+ * summed over 2 × 2 horizontal blocks of that lattice (cells 2X, 2X + 1), square roots taken
+ * after summing: the same object at twice the cell size. Its cell (0, 0, 0) is cell
+ * (⌊ox/2⌋, ⌊oy/2⌋, oz) of the binned lattice, so a shift by D binned cells is one of 2D cells. */
+void binLayer(const SurfaceDensity& fine, int ox, int oy, int oz, SourceLayer& coarse);
 
 /** \brief B(d) = Σ_j sqrt(S[j])·sqrt(T[j + o + d]) for d in [dx0,dx1]×[dy0,dy1]×[dz0,dz1],
  * summed directly over the non-zero source cells; out[((dz-dz0)·h + dy-dy0)·w + dx-dx0]. */
@@ -519,7 +530,62 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::search(
   };
   // The whole window of the middle layer: direct sum or FFT, whichever the cost model says is
   // cheaper (or as forced by setCorrelationMethod()).
-  {
+  const bool coarse_to_fine = coarse_to_fine_ && !full_yaw_window_ &&
+                              correlation_method_ != CorrelationMethod::FFT &&
+                              nr >= kCoarseMinRadius;
+  if (coarse_to_fine) {
+    // Coarse to fine: the whole window at even shifts on 2×2-binned densities (a quarter of the
+    // cells, a quarter of the shifts), then full resolution in a ±2-cell block around each of
+    // the best few coarse maxima (a binned peak can be a runner-up: the blocks decide).
+    last_method_ = CorrelationMethod::Direct;
+    if (w.coarse_target_of != target.revision()) {
+      detail::binLayer(target, 0, 0, 0, w.coarse_target);
+      w.coarse_target_of = target.revision();
+    }
+    const detail::SourceLayer& ml = w.layers[static_cast<std::size_t>(mid)];
+    detail::binLayer(ml.density, ml.ox, ml.oy, ml.oz, w.coarse_source);
+    const int cr = nr / 2, cw = 2 * cr + 1;
+    std::vector<float>& cs = w.coarse_scores;
+    cs.assign(static_cast<std::size_t>(wz) * cw * cw, 0.f);
+    detail::correlateDirect(w.coarse_target.density, w.coarse_source, -cr, cr, -cr, cr, -nrz, nrz,
+                            cs.data());
+    // Best over z shifts, then the local maxima (3×3) in decreasing order.
+    for (int dz = 1; dz < wz; ++dz)
+      for (int i = 0; i < cw * cw; ++i)
+        cs[static_cast<std::size_t>(i)] = std::max(cs[static_cast<std::size_t>(i)],
+                                                   cs[static_cast<std::size_t>(dz) * cw * cw + i]);
+    struct Peak {
+      float value;
+      int x, y;
+    };
+    Peak peaks[kCoarsePeaks];
+    int found = 0;
+    for (int y = 0; y < cw; ++y)
+      for (int x = 0; x < cw; ++x) {
+        const float v = cs[static_cast<std::size_t>(y) * cw + x];
+        if (!(v > 0.f)) continue;
+        bool is_max = true;
+        for (int ny = std::max(0, y - 1); ny <= std::min(cw - 1, y + 1) && is_max; ++ny)
+          for (int nx = std::max(0, x - 1); nx <= std::min(cw - 1, x + 1); ++nx) {
+            const float u = cs[static_cast<std::size_t>(ny) * cw + nx];
+            // Ties go to the first in scan order: deterministic plateaus.
+            if (u > v || (u == v && ny * cw + nx < y * cw + x)) {
+              is_max = false;
+              break;
+            }
+          }
+        if (!is_max) continue;
+        int k = std::min(found, kCoarsePeaks - 1);
+        if (found == kCoarsePeaks && !(v > peaks[k].value)) continue;
+        for (; k > 0 && v > peaks[k - 1].value; --k) peaks[k] = peaks[k - 1];
+        peaks[k] = {v, x - cr, y - cr};
+        found = std::min(found + 1, kCoarsePeaks);
+      }
+    for (int k = 0; k < found; ++k)
+      correlateBlock(mid, 2 * peaks[k].x - 2, 2 * peaks[k].x + 2, 2 * peaks[k].y - 2,
+                     2 * peaks[k].y + 2);
+    if (found == 0) correlateBlock(mid, -2, 2, -2, 2);  // no overlap anywhere: B = 0 at the guess
+  } else {
     const detail::SourceLayer& ml = w.layers[static_cast<std::size_t>(mid)];
     bool use_fft = correlation_method_ == CorrelationMethod::FFT;
     if (correlation_method_ == CorrelationMethod::Auto)
@@ -551,7 +617,8 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::search(
   // so they are evaluated in a ±kLocal-cell block around the middle layer's peak (unless
   // setFullYawWindow()), then grown by hill climbing until the best sample's neighbourhood is
   // fully known.
-  constexpr int kLocal = 4;
+  // Coarse to fine: ±2 cells, the hill climbing below grows the blocks where the peak leads.
+  const int kLocal = coarse_to_fine ? 2 : 4;
   for (int l = 0; l < layers; ++l) {
     if (l == mid) continue;
     if (full_yaw_window_) {
