@@ -202,31 +202,46 @@ void buildSourceLayer(SourceLayer& layer, const std::vector<Eigen::Vector3f>& po
 namespace {
 /** The non-zero cells of a freshly computed layer density, as lists (see SourceLayer). */
 void indexNonZero(SourceLayer& layer) {
-  layer.nonzero.clear();
-  layer.row_y.clear();
-  layer.row_z.clear();
-  layer.row_begin.clear();
-  layer.cell_x.clear();
-  layer.cell_v.clear();
   const SurfaceDensity& d = layer.density;
   const int sx = d.getNx(), sy = d.getNy(), sz = d.getNz();
-  const std::vector<float>& sq = d.sqrtValues();
+  const std::size_t cells = static_cast<std::size_t>(sx) * sy * sz;
+  const std::size_t rows = static_cast<std::size_t>(sy) * sz;
+  // Sized for the worst case and trimmed at the end: writes by index, no push_back per cell
+  // (the capacity stays between calls, so this allocates nothing once warm).
+  layer.nonzero.resize(cells);
+  layer.cell_x.resize(cells);
+  layer.cell_v.resize(cells);
+  layer.row_y.resize(rows);
+  layer.row_z.resize(rows);
+  layer.row_begin.resize(rows + 1);
+  int* nz_idx = layer.nonzero.data();
+  int* cx = layer.cell_x.data();
+  float* cv = layer.cell_v.data();
+  const float* sq = d.sqrtValues().data();
+  int n = 0, r = 0;
   for (int z = 0, i = 0; z < sz; ++z)
     for (int y = 0; y < sy; ++y) {
-      const std::size_t before = layer.cell_x.size();
+      const int before = n;
       for (int x = 0; x < sx; ++x, ++i) {
-        const float v = sq[static_cast<std::size_t>(i)];
-        if (!(v > 0.f)) continue;
-        layer.nonzero.push_back(i);
-        layer.cell_x.push_back(x);
-        layer.cell_v.push_back(v);
+        const float v = sq[i];
+        nz_idx[n] = i;
+        cx[n] = x;
+        cv[n] = v;
+        n += v > 0.f;  // branch-free: the slot is overwritten unless the cell has mass
       }
-      if (layer.cell_x.size() == before) continue;
-      layer.row_y.push_back(y);
-      layer.row_z.push_back(z);
-      layer.row_begin.push_back(static_cast<int>(before));
+      if (n == before) continue;
+      layer.row_y[static_cast<std::size_t>(r)] = y;
+      layer.row_z[static_cast<std::size_t>(r)] = z;
+      layer.row_begin[static_cast<std::size_t>(r)] = before;
+      ++r;
     }
-  layer.row_begin.push_back(static_cast<int>(layer.cell_x.size()));
+  layer.row_begin[static_cast<std::size_t>(r)] = n;
+  layer.nonzero.resize(static_cast<std::size_t>(n));
+  layer.cell_x.resize(static_cast<std::size_t>(n));
+  layer.cell_v.resize(static_cast<std::size_t>(n));
+  layer.row_y.resize(static_cast<std::size_t>(r));
+  layer.row_z.resize(static_cast<std::size_t>(r));
+  layer.row_begin.resize(static_cast<std::size_t>(r) + 1);
 }
 
 void clearLayer(SourceLayer& layer) {

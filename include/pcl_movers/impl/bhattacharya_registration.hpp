@@ -512,6 +512,11 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::search(
     return scores[((static_cast<std::size_t>(l) * wz + (dz + nrz)) * wx + (dy + nr)) * wx +
                   (dx + nr)];
   };
+  // The best sample so far (the first in index order among equals, as a scan would find it),
+  // kept up to date by correlateBlock(); findBest() rescans after the FFT wrote a window.
+  int bl = 0, bdz = 0, bdy = 0, bdx = 0;
+  float best = -1.f;
+  std::size_t best_index = 0;
   auto correlateBlock = [&](int l, int dx0, int dx1, int dy0, int dy1) {
     dx0 = std::max(dx0, -nr);
     dy0 = std::max(dy0, -nr);
@@ -524,9 +529,21 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::search(
                             nrz, w.block.data());
     for (int dz = -nrz; dz <= nrz; ++dz)
       for (int dy = dy0; dy <= dy1; ++dy)
-        for (int dx = dx0; dx <= dx1; ++dx)
-          at(l, dz, dy, dx) =
+        for (int dx = dx0; dx <= dx1; ++dx) {
+          const float v =
               w.block[(static_cast<std::size_t>(dz + nrz) * bh + (dy - dy0)) * bw + (dx - dx0)];
+          float& slot = at(l, dz, dy, dx);
+          slot = v;
+          const std::size_t index = static_cast<std::size_t>(&slot - scores.data());
+          if (v > best || (v == best && index < best_index)) {
+            best = v;
+            best_index = index;
+            bl = l;
+            bdz = dz;
+            bdy = dy;
+            bdx = dx;
+          }
+        }
   };
   // The whole window of the middle layer: direct sum or FFT, whichever the cost model says is
   // cheaper (or as forced by setCorrelationMethod()).
@@ -596,29 +613,30 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::search(
     else
       correlateBlock(mid, -nr, nr, -nr, nr);
   }
-  int bl = 0, bdz = 0, bdy = 0, bdx = 0;
-  float best = -1.f;
   auto findBest = [&]() {
     best = -1.f;
+    best_index = 0;
     for (int l = 0; l < layers; ++l)
       for (int dz = -nrz; dz <= nrz; ++dz)
         for (int dy = -nr; dy <= nr; ++dy)
           for (int dx = -nr; dx <= nr; ++dx)
             if (at(l, dz, dy, dx) > best) {
               best = at(l, dz, dy, dx);
+              best_index = static_cast<std::size_t>(&at(l, dz, dy, dx) - scores.data());
               bl = l;
               bdz = dz;
               bdy = dy;
               bdx = dx;
             }
   };
-  findBest();
+  if (last_method_ == CorrelationMethod::FFT) findBest();
   // The other yaw layers turn the source about its own centroid, which moves the peak little,
   // so they are evaluated in a ±kLocal-cell block around the middle layer's peak (unless
   // setFullYawWindow()), then grown by hill climbing until the best sample's neighbourhood is
   // fully known.
   // Coarse to fine: ±2 cells, the hill climbing below grows the blocks where the peak leads.
   const int kLocal = coarse_to_fine ? 2 : 4;
+  const int mdx = bdx, mdy = bdy;  // the middle layer's peak (bdx, bdy follow the best below)
   for (int l = 0; l < layers; ++l) {
     if (l == mid) continue;
     if (full_yaw_window_) {
@@ -628,21 +646,22 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::search(
       else
         correlateBlock(l, -nr, nr, -nr, nr);
     } else {
-      correlateBlock(l, bdx - kLocal, bdx + kLocal, bdy - kLocal, bdy + kLocal);
+      correlateBlock(l, mdx - kLocal, mdx + kLocal, mdy - kLocal, mdy + kLocal);
     }
   }
-  findBest();
+  if (last_method_ == CorrelationMethod::FFT) findBest();
   for (int iter = 0; iter < 4 * wx; ++iter) {
     bool grew = false;
-    for (int l = std::max(0, bl - 1); l <= std::min(layers - 1, bl + 1); ++l)
-      for (int dy = std::max(-nr, bdy - 1); dy <= std::min(nr, bdy + 1); ++dy)
-        for (int dx = std::max(-nr, bdx - 1); dx <= std::min(nr, bdx + 1); ++dx)
+    const int cl = bl, cy = bdy, cx = bdx;  // this round's best
+    for (int l = std::max(0, cl - 1); l <= std::min(layers - 1, cl + 1); ++l)
+      for (int dy = std::max(-nr, cy - 1); dy <= std::min(nr, cy + 1); ++dy)
+        for (int dx = std::max(-nr, cx - 1); dx <= std::min(nr, cx + 1); ++dx)
           if (at(l, -nrz, dy, dx) < 0.f) {
             correlateBlock(l, dx - 2, dx + 2, dy - 2, dy + 2);
             grew = true;
           }
     if (!grew) break;
-    findBest();
+    if (last_method_ == CorrelationMethod::FFT) findBest();
   }
 
   // Similarity surface for callers (max over z shifts), ix = nr + dx.
