@@ -153,6 +153,16 @@ TEST(BhattacharyaRegistration, RecoversYawWithLayers) {
   EXPECT_NEAR(mapped.x(), 15.f, 0.1f);
   EXPECT_NEAR(mapped.y(), 5.f, 0.1f);
   EXPECT_EQ(reg.getSimilaritySurface().yaws.size(), 5u);
+  // The coarse-to-fine search (default) builds the outer layers only when the hill climbing
+  // reaches them: at -9° the -10° layer must have been built and evaluated.
+  {
+    const auto& s = reg.getSimilaritySurface();
+    ASSERT_NEAR(s.yaws[0], -10.f * kDeg, 1e-5f);
+    float outer = 0.f;
+    for (int y = 0; y < s.ny; ++y)
+      for (int x = 0; x < s.nx; ++x) outer = std::max(outer, s.at(x, y, 0));
+    EXPECT_GT(outer, 0.5f);
+  }
   // Evaluating every layer over the whole window finds the same optimum (the local search is
   // only a shortcut).
   BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ> full;

@@ -82,6 +82,7 @@ struct BhattacharyaWorkspace {
   std::uint64_t coarse_target_of = 0;
   std::vector<float> coarse_scores;
   std::vector<float> scores, block, local;
+  std::vector<char> built;  // yaw layers built in this search (coarse to fine builds on demand)
   // Occlusion pass (setSourceOccluders() / setTargetOccluders()).
   ShadowImage source_shadow, target_shadow;
   std::vector<char> source_keep;
@@ -500,10 +501,23 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::search(
     for (std::size_t i = 0; i < gauss.size(); ++i)
       turned[i] = rz * (gauss[i] - centroid) + centroid + shift;
   };
-  for (int l = 0; l < layers; ++l) {
+  // Coarse to fine in yaw (setCoarseToFine()): only the middle layer and its two neighbours are
+  // built up front; a layer further out is built when the hill climbing below first reaches it
+  // (the best sample lies on its neighbour layer), which is what a unimodal B(yaw) needs.
+  const bool coarse_to_fine = coarse_to_fine_ && !full_yaw_window_ &&
+                              correlation_method_ != CorrelationMethod::FFT &&
+                              nr >= kCoarseMinRadius;
+  const bool lazy_layers = coarse_to_fine;
+  std::vector<char>& built = w.built;
+  built.assign(static_cast<std::size_t>(layers), 0);
+  auto ensureLayer = [&](int l) {
+    if (built[static_cast<std::size_t>(l)]) return;
     place(static_cast<float>(l - mid) * yaw_step_, Eigen::Vector3f::Zero());
     buildLayer(w.layers[static_cast<std::size_t>(l)], nr, nrz, 0.f);
-  }
+    built[static_cast<std::size_t>(l)] = 1;
+  };
+  for (int l = 0; l < layers; ++l)
+    if (!lazy_layers || std::abs(l - mid) <= 1) ensureLayer(l);
 
   // scores[((l·wz + dz+nrz)·wx + dy+nr)·wx + dx+nr] = B(d) of layer l; -1: not evaluated.
   std::vector<float>& scores = w.scores;
@@ -523,6 +537,7 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::search(
     dx1 = std::min(dx1, nr);
     dy1 = std::min(dy1, nr);
     if (dx1 < dx0 || dy1 < dy0) return;
+    ensureLayer(l);
     const int bw = dx1 - dx0 + 1, bh = dy1 - dy0 + 1;
     w.block.assign(static_cast<std::size_t>(wz) * bh * bw, 0.f);
     detail::correlateDirect(target, w.layers[static_cast<std::size_t>(l)], dx0, dx1, dy0, dy1, -nrz,
@@ -547,9 +562,6 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::search(
   };
   // The whole window of the middle layer: direct sum or FFT, whichever the cost model says is
   // cheaper (or as forced by setCorrelationMethod()).
-  const bool coarse_to_fine = coarse_to_fine_ && !full_yaw_window_ &&
-                              correlation_method_ != CorrelationMethod::FFT &&
-                              nr >= kCoarseMinRadius;
   if (coarse_to_fine) {
     // Coarse to fine: the whole window at even shifts on 2×2-binned densities (a quarter of the
     // cells, a quarter of the shifts), then full resolution in a ±2-cell block around each of
@@ -638,7 +650,7 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::search(
   const int kLocal = coarse_to_fine ? 2 : 4;
   const int mdx = bdx, mdy = bdy;  // the middle layer's peak (bdx, bdy follow the best below)
   for (int l = 0; l < layers; ++l) {
-    if (l == mid) continue;
+    if (l == mid || (lazy_layers && std::abs(l - mid) > 1)) continue;
     if (full_yaw_window_) {
       if (last_method_ == CorrelationMethod::FFT)
         detail::correlateFft(w, target, w.layers[static_cast<std::size_t>(l)], nr, nrz,
