@@ -9,7 +9,9 @@
  *                                 containing "occ" hands the occluder returns over)
  *   bench_registration --quick [FILE]   the Bhattacharyya rows of --report with ICP/NDT times
  *                                 (before/after checks; FILE gets every trial's error and B)
+ *   bench_registration --ab [REPS]   5 yaw layers, exact vs default search interleaved (speed)
  *   --slices N (before the above)   N vertical slices for every Bhattacharyya method
+ *   --exact (before the above)   every Bhattacharyya method with setCoarseToFine(false)
  *
  * SPDX-License-Identifier: BSD-3-Clause
  */
@@ -34,6 +36,7 @@
 #include <ctime>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <random>
 #include <string>
@@ -65,12 +68,17 @@ struct Method {
  * 0.959 / 1.000 (7 slices: 0.962 / 1.000), about half the time. */
 int g_vertical_slices = 3;
 
+/** --exact: every BhattacharyaRegistration with setCoarseToFine(false) (the exact full-window
+ * search), to compare the default coarse-to-fine search against it in one binary. */
+bool g_exact = false;
+
 pcl_movers::BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ>::Ptr makeBr(int yaws) {
   auto r = pcl::make_shared<pcl_movers::BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ>>();
   r->setSearchRadius(3.2f);
   r->setYawSamples(yaws);
   r->setYawStep(5.f * kPi / 180.f);
   if (g_vertical_slices > 0) r->setVerticalSlices(g_vertical_slices);
+  if (g_exact) r->setCoarseToFine(false);
   return r;
 }
 
@@ -530,6 +538,52 @@ int quick(const char* dump) {
   return 0;
 }
 
+/** --ab [REPS]: the 5-yaw-layer method on the simulated pairs of --quick, exact search
+ * (setCoarseToFine(false)) and default interleaved trial by trial, REPS times (default 5); per
+ * trial the fastest repetition (thread CPU), then the median over trials, success and median
+ * error of each: a side-by-side speed check that is less sensitive to a loaded machine. */
+int ab(int reps) {
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);
+  pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
+  const auto sim = pcl_movers::eval::makeSimulatedPairs(300, 7);
+  const auto trials = makeTrials(sim.size(), 11);
+  constexpr int kVariants = 2;
+  const char* names[kVariants] = {"exact (setCoarseToFine(false))", "default"};
+  std::vector<float> best[kVariants], err[kVariants];
+  for (int v = 0; v < kVariants; ++v) {
+    best[v].assign(trials.size(), std::numeric_limits<float>::max());
+    err[v].assign(trials.size(), 0.f);
+  }
+  Cloud out;
+  for (int rep = 0; rep < reps; ++rep)
+    for (std::size_t i = 0; i < trials.size(); ++i)
+      for (int v = 0; v < kVariants; ++v) {
+        const RegistrationPair& p = sim[trials[i].pair];
+        auto reg = makeBr(5);
+        if (v == 0) reg->setCoarseToFine(false);
+        const Eigen::Matrix4f guess =
+            pcl_movers::eval::perturbedGuess(p, trials[i].offset, trials[i].angle);
+        const double start = pcl_movers_bench::threadCpuMs();
+        reg->setInputSource(p.source);
+        reg->setInputTarget(p.target);
+        reg->align(out, guess);
+        const double ms = pcl_movers_bench::threadCpuMs() - start;
+        best[v][i] = std::min(best[v][i], static_cast<float>(ms));
+        err[v][i] = pcl_movers::eval::translationError(reg->getFinalTransformation(), p);
+      }
+  for (int v = 0; v < kVariants; ++v) {
+    int ok = 0;
+    for (float e : err[v]) ok += e < 0.1f;
+    std::printf("%-32s | success %s | median err %.4f | median %.3f ms (ratio to exact %.2f)\n",
+                names[v], pct(ok, static_cast<int>(err[v].size())).c_str(), median(err[v]),
+                median(best[v]), median(best[v]) / median(best[0]));
+  }
+  int differ = 0;
+  for (std::size_t i = 0; i < trials.size(); ++i) differ += err[1][i] != err[0][i];
+  std::printf("default: error differs from exact in %d trials\n", differ);
+  return 0;
+}
+
 /** Every failed simulated pair of the 5-yaw-layer method with what went wrong (diagnosis). */
 int failures(const char* variant) {
   pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
@@ -827,10 +881,14 @@ int main(int argc, char** argv) {
   for (int i = 1; i + 1 < argc; ++i)
     if (std::strcmp(argv[i], "--slices") == 0) g_vertical_slices = std::atoi(argv[i + 1]);
   for (int i = 1; i < argc; ++i)
+    if (std::strcmp(argv[i], "--exact") == 0) g_exact = true;
+  for (int i = 1; i < argc; ++i)
     if (std::strcmp(argv[i], "--report") == 0)
       return report();
     else if (std::strcmp(argv[i], "--quick") == 0)
       return quick(i + 1 < argc ? argv[i + 1] : nullptr);
+    else if (std::strcmp(argv[i], "--ab") == 0)
+      return ab(i + 1 < argc ? std::max(1, std::atoi(argv[i + 1])) : 5);
     else if (std::strcmp(argv[i], "--calibrate") == 0)
       return calibrate();
     else if (std::strcmp(argv[i], "--probe") == 0)

@@ -199,6 +199,63 @@ void buildSourceLayer(SourceLayer& layer, const std::vector<Eigen::Vector3f>& po
   buildSourceLayer(layer, points, sigmas, sigmas, kNoWeights, target, nr, nrz);
 }
 
+namespace {
+/** The non-zero cells of a freshly computed layer density, as lists (see SourceLayer). */
+void indexNonZero(SourceLayer& layer) {
+  const SurfaceDensity& d = layer.density;
+  const int sx = d.getNx(), sy = d.getNy(), sz = d.getNz();
+  const std::size_t cells = static_cast<std::size_t>(sx) * sy * sz;
+  const std::size_t rows = static_cast<std::size_t>(sy) * sz;
+  // Sized for the worst case and trimmed at the end: writes by index, no push_back per cell
+  // (the capacity stays between calls, so this allocates nothing once warm).
+  layer.nonzero.resize(cells);
+  layer.cell_x.resize(cells);
+  layer.cell_v.resize(cells);
+  layer.row_y.resize(rows);
+  layer.row_z.resize(rows);
+  layer.row_begin.resize(rows + 1);
+  int* nz_idx = layer.nonzero.data();
+  int* cx = layer.cell_x.data();
+  float* cv = layer.cell_v.data();
+  const float* sq = d.sqrtValues().data();
+  int n = 0, r = 0;
+  for (int z = 0, i = 0; z < sz; ++z)
+    for (int y = 0; y < sy; ++y) {
+      const int before = n;
+      for (int x = 0; x < sx; ++x, ++i) {
+        const float v = sq[i];
+        nz_idx[n] = i;
+        cx[n] = x;
+        cv[n] = v;
+        n += v > 0.f;  // branch-free: the slot is overwritten unless the cell has mass
+      }
+      if (n == before) continue;
+      layer.row_y[static_cast<std::size_t>(r)] = y;
+      layer.row_z[static_cast<std::size_t>(r)] = z;
+      layer.row_begin[static_cast<std::size_t>(r)] = before;
+      ++r;
+    }
+  layer.row_begin[static_cast<std::size_t>(r)] = n;
+  layer.nonzero.resize(static_cast<std::size_t>(n));
+  layer.cell_x.resize(static_cast<std::size_t>(n));
+  layer.cell_v.resize(static_cast<std::size_t>(n));
+  layer.row_y.resize(static_cast<std::size_t>(r));
+  layer.row_z.resize(static_cast<std::size_t>(r));
+  layer.row_begin.resize(static_cast<std::size_t>(r) + 1);
+}
+
+void clearLayer(SourceLayer& layer) {
+  layer.density.clear();
+  layer.ox = layer.oy = layer.oz = 0;
+  layer.nonzero.clear();
+  layer.row_y.clear();
+  layer.row_z.clear();
+  layer.row_begin.assign(1, 0);
+  layer.cell_x.clear();
+  layer.cell_v.clear();
+}
+}  // namespace
+
 void buildSourceLayer(SourceLayer& layer, const std::vector<Eigen::Vector3f>& points,
                       const std::vector<float>& sigmas_xy, const std::vector<float>& sigmas_z,
                       const std::vector<float>& weights, const SurfaceDensity& target, int nr,
@@ -214,12 +271,6 @@ void buildSourceLayer(SourceLayer& layer, const std::vector<Eigen::Vector3f>& po
     lo = lo.cwiseMin(points[i] - reach);
     hi = hi.cwiseMax(points[i] + reach);
   }
-  layer.nonzero.clear();
-  layer.row_y.clear();
-  layer.row_z.clear();
-  layer.row_begin.clear();
-  layer.cell_x.clear();
-  layer.cell_v.clear();
   // Cells of the target lattice covered by the Gaussians, clipped to those that can overlap
   // the target for some searched shift (the rest never contributes).
   auto cellRange = [](float a, float b, float origin, float cell, int lo_lim, int hi_lim,
@@ -233,8 +284,7 @@ void buildSourceLayer(SourceLayer& layer, const std::vector<Eigen::Vector3f>& po
   cellRange(lo.y(), hi.y(), tlo.y(), res, -nr, ny - 1 + nr, ay, by);
   cellRange(lo.z(), hi.z(), tlo.z(), res_z, -nrz, nz - 1 + nrz, az, bz);
   if (points.empty() || bx < ax || by < ay || bz < az) {
-    layer.density.clear();
-    layer.ox = layer.oy = layer.oz = 0;
+    clearLayer(layer);
     return;
   }
   const int sx = bx - ax + 1, sy = by - ay + 1, sz = bz - az + 1;
@@ -250,23 +300,66 @@ void buildSourceLayer(SourceLayer& layer, const std::vector<Eigen::Vector3f>& po
       tlo +
       Eigen::Vector3f((ax + 0.5f * sx) * res, (ay + 0.5f * sy) * res, (az + 0.5f * sz) * res_z);
   d.computeFromGaussians(points, sigmas_xy, sigmas_z, weights, centre);
-  const std::vector<float>& sq = d.sqrtValues();
-  for (int z = 0, i = 0; z < sz; ++z)
-    for (int y = 0; y < sy; ++y) {
-      const std::size_t before = layer.cell_x.size();
-      for (int x = 0; x < sx; ++x, ++i) {
-        const float v = sq[static_cast<std::size_t>(i)];
-        if (!(v > 0.f)) continue;
-        layer.nonzero.push_back(i);
-        layer.cell_x.push_back(x);
-        layer.cell_v.push_back(v);
-      }
-      if (layer.cell_x.size() == before) continue;
-      layer.row_y.push_back(y);
-      layer.row_z.push_back(z);
-      layer.row_begin.push_back(static_cast<int>(before));
-    }
-  layer.row_begin.push_back(static_cast<int>(layer.cell_x.size()));
+  indexNonZero(layer);
+}
+
+void prepareSource(SurfaceDensity::PreparedGaussians& prepared,
+                   const std::vector<Eigen::Vector3f>& points, const std::vector<float>& sigmas_xy,
+                   const std::vector<float>& sigmas_z, const std::vector<float>& weights,
+                   const SurfaceDensity& target, int nrz, float z_shift) {
+  const float res_z = target.getResolutionZ();
+  // Lattice cell 0 of the target; a shift of the points is a shift of the lattice the other way.
+  const float z0 = target.getCentre().z() - 0.5f * static_cast<float>(target.getNz()) * res_z;
+  SurfaceDensity::prepareGaussians(points, sigmas_xy, sigmas_z, weights, target.getResolution(),
+                                   res_z, z0 - z_shift, -nrz, target.getNz() - 1 + nrz, prepared);
+}
+
+void buildSourceLayer(SourceLayer& layer, const std::vector<Eigen::Vector3f>& points,
+                      const SurfaceDensity::PreparedGaussians& prepared,
+                      const SurfaceDensity& target, int nr, int nrz) {
+  const int nx = target.getNx(), ny = target.getNy(), nz = target.getNz();
+  const float res = target.getResolution(), res_z = target.getResolutionZ();
+  const float tx = target.getCentre().x() - 0.5f * static_cast<float>(nx) * res;
+  const float ty = target.getCentre().y() - 0.5f * static_cast<float>(ny) * res;
+  const float inv_res = 1.f / res;
+  // Horizontal reach in cells of the target lattice (the ±3σ windows), vertical from the
+  // preparation.
+  float lx = std::numeric_limits<float>::max(), ly = lx, hx = -lx, hy = -lx;
+  for (std::size_t k = 0; k < prepared.index.size(); ++k) {
+    const Eigen::Vector3f& p = points[static_cast<std::size_t>(prepared.index[k])];
+    const float u = (p.x() - tx) * inv_res, v = (p.y() - ty) * inv_res, r = prepared.reach_xy[k];
+    lx = std::min(lx, u - r);
+    hx = std::max(hx, u + r);
+    ly = std::min(ly, v - r);
+    hy = std::max(hy, v + r);
+  }
+  const int az = std::max(prepared.z_min, -nrz), bz = std::min(prepared.z_max, nz - 1 + nrz);
+  auto clip = [](float a, float b, int lo_lim, int hi_lim, int& first, int& last) {
+    first = static_cast<int>(std::max(std::floor(a), static_cast<float>(lo_lim)));
+    last = static_cast<int>(std::min(std::floor(b), static_cast<float>(hi_lim)));
+  };
+  int ax = 0, bx = -1, ay = 0, by = -1;
+  if (!prepared.empty()) {
+    clip(lx, hx, -nr, nx - 1 + nr, ax, bx);
+    clip(ly, hy, -nr, ny - 1 + nr, ay, by);
+  }
+  if (prepared.empty() || bx < ax || by < ay || bz < az) {
+    clearLayer(layer);
+    return;
+  }
+  const int sx = bx - ax + 1, sy = by - ay + 1, sz = bz - az + 1;
+  SurfaceDensity& d = layer.density;
+  if (d.getNx() != sx || d.getNy() != sy || d.getNz() != sz) d.setGridSize(sx, sy, sz);
+  d.setResolution(res);
+  d.setResolutionZ(res_z);
+  layer.ox = ax;
+  layer.oy = ay;
+  layer.oz = az;
+  const Eigen::Vector3f centre(tx + (static_cast<float>(ax) + 0.5f * sx) * res,
+                               ty + (static_cast<float>(ay) + 0.5f * sy) * res,
+                               prepared.z0 + (static_cast<float>(az) + 0.5f * sz) * res_z);
+  d.computeFromPrepared(prepared, points, centre);
+  indexNonZero(layer);
 }
 
 namespace {
@@ -281,7 +374,13 @@ struct PaddedTarget {
 };
 
 const float* paddedRows(const SurfaceDensity& target, int pad, int& stride) {
-  thread_local PaddedTarget p;
+  // Two entries: the coarse-to-fine search alternates between the target and its binned copy.
+  thread_local PaddedTarget cache[2];
+  thread_local int last_used = 0;
+  int slot = cache[0].revision == target.revision() ? 0 : 1;
+  if (cache[slot].revision != target.revision()) slot = 1 - last_used;
+  last_used = slot;
+  PaddedTarget& p = cache[slot];
   const int nx = target.getNx(), ny = target.getNy(), nz = target.getNz();
   if (p.revision != target.revision() || p.pad < pad) {
     // Round up: windows of a few sizes alternate (layers, blocks, refinement).
@@ -363,6 +462,37 @@ void correlateDirect(const SurfaceDensity& target, const SourceLayer& src, int d
         }
       }
   }
+}
+
+namespace {
+int floorDiv2(int v) {
+  return v >= 0 ? v / 2 : -((1 - v) / 2);
+}
+}  // namespace
+
+void binLayer(const SurfaceDensity& fine, int ox, int oy, int oz, SourceLayer& coarse) {
+  const int fx = fine.getNx(), fy = fine.getNy(), fz = fine.getNz();
+  const int cx0 = floorDiv2(ox), cy0 = floorDiv2(oy);
+  const int cnx = floorDiv2(ox + fx - 1) - cx0 + 1, cny = floorDiv2(oy + fy - 1) - cy0 + 1;
+  SurfaceDensity& d = coarse.density;
+  if (d.getNx() != cnx || d.getNy() != cny || d.getNz() != fz) d.setGridSize(cnx, cny, fz);
+  d.setResolution(2.f * fine.getResolution());
+  d.setResolutionZ(fine.getResolutionZ());
+  thread_local std::vector<float> sum;
+  sum.assign(static_cast<std::size_t>(cnx) * cny * fz, 0.f);
+  const std::vector<float>& v = fine.values();
+  for (int z = 0, i = 0; z < fz; ++z)
+    for (int y = 0; y < fy; ++y) {
+      float* row =
+          sum.data() + (static_cast<std::size_t>(z) * cny + (floorDiv2(oy + y) - cy0)) * cnx;
+      for (int x = 0; x < fx; ++x, ++i)
+        row[floorDiv2(ox + x) - cx0] += v[static_cast<std::size_t>(i)];
+    }
+  d.setValues(sum);
+  coarse.ox = cx0;
+  coarse.oy = cy0;
+  coarse.oz = oz;
+  indexNonZero(coarse);
 }
 
 /** FFT plans, buffers and the cached spectra of the last target. 2-D transforms of the

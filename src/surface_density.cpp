@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -285,6 +286,140 @@ void SurfaceDensity::computeFromGaussians(const std::vector<Eigen::Vector3f>& po
         const float fzy = fz * wy.w[ky];
         float* __restrict row = &data_[index(wx.first, wy.first + ky, wz.first + kz)];
         for (int kx = 0; kx < wx.count; ++kx) row[kx] += fzy * wxw[kx];
+      }
+    }
+  }
+  updateSqrt();
+}
+
+namespace {
+/** axisWeights() for a Gaussian at u cells from the lower bound of cell 0, with a = cell / (√2 σ)
+ * and reach = 3σ / cell precomputed, over cells [0, n - 1]: the same window and normalisation.
+ * `e` needs room for n + 5 values; returns the number of cells (0: the Gaussian misses). */
+inline int preparedAxisWeights(float u, float a, float reach, int n, int& first, float* e) {
+  const float lo = std::floor(u - reach);
+  const float hi = std::floor(u + reach);
+  // Written so that NaN and infinite positions fail too.
+  if (!(hi >= 0.f) || !(lo <= static_cast<float>(n - 1))) return 0;
+  first = static_cast<int>(std::max(lo, 0.f));
+  const int last = static_cast<int>(std::min(hi, static_cast<float>(n - 1)));
+  const int count = last - first + 2;  // boundaries
+  int k = 0;
+#ifdef __SSE2__
+  {
+    const __m128 va = _mm_set1_ps(a), vu = _mm_set1_ps(u);
+    for (; k < count; k += 4) {
+      const __m128 fi =
+          _mm_cvtepi32_ps(_mm_add_epi32(_mm_set1_epi32(first + k), _mm_setr_epi32(0, 1, 2, 3)));
+      _mm_storeu_ps(e + k, g_erf_table.eval4(_mm_mul_ps(_mm_sub_ps(fi, vu), va)));
+    }
+  }
+#endif
+  for (; k < count; ++k) e[k] = fastErf((static_cast<float>(first + k) - u) * a);
+  const float e_lo = lo == static_cast<float>(first) ? e[0] : fastErf((lo - u) * a);
+  const float e_hi =
+      hi == static_cast<float>(last) ? e[last - first + 1] : fastErf((hi + 1.f - u) * a);
+  const float total = e_hi - e_lo;
+  if (!(total > 0.f)) return 0;
+  const float scale = 1.f / total;
+  for (k = 0; k <= last - first; ++k) e[k] = (e[k + 1] - e[k]) * scale;
+  return last - first + 1;
+}
+}  // namespace
+
+void SurfaceDensity::prepareGaussians(const std::vector<Eigen::Vector3f>& points,
+                                      const std::vector<float>& sigmas_xy,
+                                      const std::vector<float>& sigmas_z,
+                                      const std::vector<float>& weights, float resolution,
+                                      float resolution_z, float z0, int z_lo, int z_hi,
+                                      PreparedGaussians& out) {
+  if (points.size() != sigmas_xy.size() || points.size() != sigmas_z.size() ||
+      (!weights.empty() && weights.size() != points.size()))
+    throw std::invalid_argument(
+        "SurfaceDensity::prepareGaussians: points, sigmas and weights differ in size");
+  if (!(resolution > 0.f) || !(resolution_z > 0.f))
+    throw std::invalid_argument("SurfaceDensity: resolutions must be positive");
+  out.resolution = resolution;
+  out.resolution_z = resolution_z;
+  out.z0 = z0;
+  out.z_min = std::numeric_limits<int>::max();
+  out.z_max = std::numeric_limits<int>::min();
+  out.index.clear();
+  out.a_xy.clear();
+  out.reach_xy.clear();
+  out.z_first.clear();
+  out.z_begin.assign(1, 0);
+  out.wz.clear();
+  auto valid = [&](std::size_t i) {
+    return points[i].allFinite() && sigmas_xy[i] > 0.f && std::isfinite(sigmas_xy[i]) &&
+           sigmas_z[i] > 0.f && std::isfinite(sigmas_z[i]) &&
+           (weights.empty() || (weights[i] > 0.f && std::isfinite(weights[i])));
+  };
+  double total_weight = 0.0;
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (valid(i)) total_weight += weights.empty() ? 1.0 : static_cast<double>(weights[i]);
+  if (!(total_weight > 0.0) || z_hi < z_lo) return;
+  const float unit_mass = static_cast<float>(1.0 / total_weight);
+  // The lattice cells [z_lo, z_hi] as a grid of its own (cell 0 = z_lo) for axisWeights().
+  const int nz = z_hi - z_lo + 1;
+  const float oz = z0 + static_cast<float>(z_lo) * resolution_z;
+  AxisWeights wz;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (!valid(i)) continue;
+    axisWeights(points[i].z(), sigmas_z[i], oz, resolution_z, nz, wz);
+    if (wz.count == 0) continue;
+    const float mass = weights.empty() ? unit_mass : unit_mass * weights[i];
+    out.index.push_back(static_cast<int>(i));
+    out.a_xy.push_back(resolution / (std::sqrt(2.f) * sigmas_xy[i]));
+    out.reach_xy.push_back(3.f * sigmas_xy[i] / resolution);
+    out.z_first.push_back(z_lo + wz.first);
+    for (int k = 0; k < wz.count; ++k) out.wz.push_back(mass * wz.w[k]);
+    out.z_begin.push_back(static_cast<int>(out.wz.size()));
+    out.z_min = std::min(out.z_min, z_lo + wz.first);
+    out.z_max = std::max(out.z_max, z_lo + wz.first + wz.count - 1);
+  }
+}
+
+void SurfaceDensity::computeFromPrepared(const PreparedGaussians& g,
+                                         const std::vector<Eigen::Vector3f>& points,
+                                         const Eigen::Vector3f& centre) {
+  if (g.resolution != resolution_ || g.resolution_z != resolution_z_)
+    throw std::invalid_argument(
+        "SurfaceDensity::computeFromPrepared: prepared for other resolutions");
+  centre_ = centre;
+  std::fill(data_.begin(), data_.end(), 0.f);
+  const float ox = centre.x() - 0.5f * nx_ * resolution_;
+  const float oy = centre.y() - 0.5f * ny_ * resolution_;
+  // Lattice index of this grid's lowest cell.
+  const int oz = static_cast<int>(
+      std::lround((centre.z() - 0.5f * nz_ * resolution_z_ - g.z0) / resolution_z_));
+  const float inv_res = 1.f / resolution_;
+  // Cell weights of both axes; room for the grid plus the four-wide loop's overrun.
+  thread_local std::vector<float> buf;
+  const std::size_t room = static_cast<std::size_t>(std::max(nx_, ny_)) + 8;
+  if (buf.size() < 2 * room) buf.resize(2 * room);
+  float* __restrict wx = buf.data();
+  float* __restrict wy = buf.data() + room;
+  for (std::size_t k = 0; k < g.index.size(); ++k) {
+    // Vertical cells inside this grid.
+    const int z_first = g.z_first[k] - oz;
+    const int b = g.z_begin[k], e = g.z_begin[k + 1];
+    const int kz0 = std::max(0, -z_first), kz1 = std::min(e - b, nz_ - z_first);
+    if (kz1 <= kz0) continue;
+    const Eigen::Vector3f& p = points[static_cast<std::size_t>(g.index[k])];
+    int fy = 0, fx = 0;
+    const int cy =
+        preparedAxisWeights((p.y() - oy) * inv_res, g.a_xy[k], g.reach_xy[k], ny_, fy, wy);
+    if (cy == 0) continue;
+    const int cx =
+        preparedAxisWeights((p.x() - ox) * inv_res, g.a_xy[k], g.reach_xy[k], nx_, fx, wx);
+    if (cx == 0) continue;
+    for (int kz = kz0; kz < kz1; ++kz) {
+      const float fz = g.wz[static_cast<std::size_t>(b + kz)];
+      for (int ky = 0; ky < cy; ++ky) {
+        const float fzy = fz * wy[ky];
+        float* __restrict row = &data_[index(fx, fy + ky, z_first + kz)];
+        for (int kx = 0; kx < cx; ++kx) row[kx] += fzy * wx[kx];
       }
     }
   }

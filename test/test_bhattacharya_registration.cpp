@@ -57,6 +57,7 @@ TEST(BhattacharyaRegistration, IdenticalCloudsGiveBOneAndIdentity) {
   auto cloud = vehicle(15.f, 3.f, 0.3f, sensor, 0.f, 1);
   ASSERT_GT(cloud->size(), 200u);
   BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ> reg;
+  reg.setCoarseToFine(false);  // the whole surface is checked below
   reg.setInputSource(cloud);
   reg.setInputTarget(cloud);
   pcl::PointCloud<pcl::PointXYZ> out;
@@ -152,6 +153,16 @@ TEST(BhattacharyaRegistration, RecoversYawWithLayers) {
   EXPECT_NEAR(mapped.x(), 15.f, 0.1f);
   EXPECT_NEAR(mapped.y(), 5.f, 0.1f);
   EXPECT_EQ(reg.getSimilaritySurface().yaws.size(), 5u);
+  // The coarse-to-fine search (default) builds the outer layers only when the hill climbing
+  // reaches them: at -9° the -10° layer must have been built and evaluated.
+  {
+    const auto& s = reg.getSimilaritySurface();
+    ASSERT_NEAR(s.yaws[0], -10.f * kDeg, 1e-5f);
+    float outer = 0.f;
+    for (int y = 0; y < s.ny; ++y)
+      for (int x = 0; x < s.nx; ++x) outer = std::max(outer, s.at(x, y, 0));
+    EXPECT_GT(outer, 0.5f);
+  }
   // Evaluating every layer over the whole window finds the same optimum (the local search is
   // only a shortcut).
   BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ> full;
@@ -441,6 +452,51 @@ TEST(BhattacharyaRegistration, FftAndDirectGiveTheSameSurface) {
     EXPECT_LT(worst, 1e-4f) << "at x = " << s.x;
     EXPECT_LT((results[0] - results[1]).cwiseAbs().maxCoeff(), 1e-3f);
   }
+}
+
+TEST(BhattacharyaRegistration, CoarseToFineFindsTheExactSearchsOptimum) {
+  // The coarse-to-fine search (default) against the exact full-window search on simulated pairs
+  // (vehicles and people at 10-60 m, some occluded) from guesses 0-3 m off, with the benchmark's
+  // settings: the same optimum, so the same transformation and B up to float rounding.
+  const auto pairs = pcl_movers::eval::makeSimulatedPairs(40, 3);
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<float> u(0.f, 1.f);
+  int coarse_used = 0;
+  for (std::size_t i = 0; i < pairs.size(); ++i) {
+    const RegistrationPair& p = pairs[i];
+    const Eigen::Matrix4f guess =
+        pcl_movers::eval::perturbedGuess(p, 3.f * u(rng), 2.f * 3.14159265f * u(rng));
+    Eigen::Matrix4f result[2];
+    float b[2];
+    bool converged[2];
+    int nonzero[2];
+    for (int exact = 0; exact < 2; ++exact) {
+      BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ> reg;
+      reg.setSearchRadius(3.2f);
+      reg.setYawSamples(5);
+      reg.setVerticalSlices(3);
+      reg.setCoarseToFine(exact == 0);
+      reg.setInputSource(p.source);
+      reg.setInputTarget(p.target);
+      pcl::PointCloud<pcl::PointXYZ> out;
+      reg.align(out, guess);
+      result[exact] = reg.getFinalTransformation();
+      b[exact] = reg.getSimilarity();
+      converged[exact] = reg.hasConverged();
+      // Samples of the middle layer with B > 0: every overlapping shift for the exact search,
+      // only those of a few blocks for the coarse-to-fine one.
+      const auto& s = reg.getSimilaritySurface();
+      nonzero[exact] = 0;
+      for (int y = 0; y < s.ny; ++y)
+        for (int x = 0; x < s.nx; ++x) nonzero[exact] += s.at(x, y, 2) > 0.f;
+    }
+    coarse_used += 4 * nonzero[0] < nonzero[1];
+    EXPECT_EQ(converged[0], converged[1]) << "pair " << i;
+    EXPECT_LT((result[0].block<3, 1>(0, 3) - result[1].block<3, 1>(0, 3)).norm(), 0.005f)
+        << "pair " << i << " (" << p.label << ")";
+    EXPECT_NEAR(b[0], b[1], 1e-3f) << "pair " << i;
+  }
+  EXPECT_GT(coarse_used, 30);
 }
 
 TEST(BhattacharyaRegistration, SubCellAccuracyWithBothPathsAndReCentring) {

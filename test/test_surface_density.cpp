@@ -362,3 +362,50 @@ TEST(SurfaceDensity, CellWeightsMatchErfReferenceInsideClippedAndWideWindows) {
       ASSERT_EQ(d.sqrtValues()[i], std::sqrt(d.values()[i])) << i;
   }
 }
+
+TEST(SurfaceDensity, PreparedGaussiansMatchComputeFromGaussians) {
+  // computeFromPrepared() (vertical weights computed once, horizontal positions per call) gives
+  // computeFromGaussians()'s density up to float rounding, for grids on the prepared lattice and
+  // Gaussians moved horizontally after the preparation, including clipped and missing ones.
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-2.5f, 2.5f), s(0.08f, 0.4f), wt(1.f, 5.f);
+  std::vector<Eigen::Vector3f> pts;
+  std::vector<float> sxy, sz, w;
+  for (int i = 0; i < 300; ++i) {
+    pts.emplace_back(u(rng), u(rng), 0.5f * u(rng));
+    sxy.push_back(s(rng));
+    sz.push_back(s(rng));
+    w.push_back(wt(rng));
+  }
+  pts.emplace_back(40.f, 0.f, 0.f);  // misses every grid below
+  sxy.push_back(0.1f);
+  sz.push_back(0.1f);
+  w.push_back(1.f);
+  const float res = 0.2f, res_z = 0.93f;
+  // Lattice: cell 0 of a 29 × 29 × 3 grid centred at the origin; prepared for 2 extra cells.
+  const float z0 = -1.5f * res_z;
+  SurfaceDensity::PreparedGaussians prepared;
+  SurfaceDensity::prepareGaussians(pts, sxy, sz, w, res, res_z, z0, -2, 4, prepared);
+  EXPECT_EQ(prepared.index.size(), pts.size());  // the far one has vertical weights
+  const Eigen::Vector3f shift(0.37f, -0.113f, 0.f);
+  std::vector<Eigen::Vector3f> moved = pts;
+  for (auto& p : moved) p += shift;
+  for (const Eigen::Vector3f centre :
+       {Eigen::Vector3f(0.f, 0.f, 0.f), Eigen::Vector3f(0.3f, -0.5f, res_z)}) {
+    SurfaceDensity a(29, 29, 3, res, res_z), b(29, 29, 3, res, res_z);
+    a.computeFromGaussians(moved, sxy, sz, w, centre);
+    // z of the points is ignored: scramble it.
+    std::vector<Eigen::Vector3f> flat = moved;
+    for (auto& p : flat) p.z() = 100.f;
+    b.computeFromPrepared(prepared, flat, centre);
+    double max_err = 0.0;
+    for (std::size_t i = 0; i < a.size(); ++i)
+      max_err = std::max(max_err, static_cast<double>(std::abs(a.values()[i] - b.values()[i])));
+    EXPECT_LT(max_err, 1e-6) << centre.transpose();
+    EXPECT_NEAR(a.totalMass(), b.totalMass(), 1e-5f);
+    EXPECT_GT(a.totalMass(), 0.5f);
+  }
+  SurfaceDensity other(29, 29, 3, 0.25f, res_z);
+  EXPECT_THROW(other.computeFromPrepared(prepared, moved, Eigen::Vector3f::Zero()),
+               std::invalid_argument);
+}

@@ -175,6 +175,18 @@ class BhattacharyaRegistration : public pcl::Registration<PointSource, PointTarg
   void setFullYawWindow(bool full) { full_yaw_window_ = full; }
   bool getFullYawWindow() const { return full_yaw_window_; }
 
+  /** \brief Coarse-to-fine translation search (default true): the middle yaw layer is
+   * searched over the whole window on 2 × 2-binned densities (0.4 m cells for the default
+   * 0.2 m) at every second shift, then at full resolution in ±2-cell blocks around the best
+   * three coarse maxima, and grown by hill climbing like the other layers. About a tenth of the
+   * multiply-adds of the full window; the optimum is the full search's unless the binned surface
+   * ranks the true peak below three others (see docs/registration.md). Yaw layers beyond the
+   * middle one's neighbours are only built when the hill climbing reaches them. Not used when
+   * setFullYawWindow() is set, the FFT is forced, or the window is under ±6 cells. false: the
+   * exact full-window search. getSimilaritySurface() then holds 0 where nothing was evaluated. */
+  void setCoarseToFine(bool coarse_to_fine) { coarse_to_fine_ = coarse_to_fine; }
+  bool getCoarseToFine() const { return coarse_to_fine_; }
+
   /** \brief How the similarity over the whole translation window is computed: `Auto` (the
    * default) picks the cheaper of the two by a cost model measured on this code (see
    * docs/registration.md); `Direct` sums over the non-zero source cells; `FFT` multiplies
@@ -272,6 +284,9 @@ class BhattacharyaRegistration : public pcl::Registration<PointSource, PointTarg
   void occlusionPass();
   static constexpr float kOcclusionRadius = 1.0f;
   static constexpr int kOcclusionPasses = 3;
+  /** Coarse-to-fine search: coarse maxima verified at full resolution, smallest window. */
+  static constexpr int kCoarsePeaks = 3;
+  static constexpr int kCoarseMinRadius = 6;
 
   /** \brief The target's density: the one set with setTargetDensity(), or the one built from
    * target_ (kept between calls while the cloud and the grid parameters stay the same). Null
@@ -293,6 +308,7 @@ class BhattacharyaRegistration : public pcl::Registration<PointSource, PointTarg
   float merge_fraction_ = 1.0f;
   bool search_z_ = false;
   bool full_yaw_window_ = false;
+  bool coarse_to_fine_ = true;
   bool compute_source_density_ = true;
   float search_radius_z_ = 0.4f;
   Eigen::Vector3f sensor_origin_ = Eigen::Vector3f::Zero();

@@ -115,6 +115,45 @@ class SurfaceDensity {
                              std::vector<float>& out_sigmas_xy, std::vector<float>& out_sigmas_z,
                              std::vector<float>& out_weights);
 
+  /** \brief Gaussians prepared for repeated rasterisation while only their horizontal positions
+   * change (the yaw layers and shifts of a registration): per Gaussian the horizontal constants
+   * and the vertical cell weights (times its mass) are computed once by prepareGaussians(), so
+   * computeFromPrepared() evaluates two axes per Gaussian instead of three. */
+  struct PreparedGaussians {
+    float resolution = 0.f;       ///< horizontal cell size the constants are for [m]
+    float resolution_z = 0.f;     ///< vertical cell size [m]
+    float z0 = 0.f;               ///< lower bound of vertical lattice cell 0 [m]
+    int z_min = 0, z_max = -1;    ///< lattice z cells holding any weight
+    std::vector<int> index;       ///< input position of each prepared Gaussian
+    std::vector<float> a_xy;      ///< resolution / (√2 σ_xy)
+    std::vector<float> reach_xy;  ///< 3 σ_xy / resolution (the ±3σ window)
+    std::vector<int> z_first;     ///< lattice z cell of the first vertical weight
+    std::vector<int> z_begin;     ///< weights of Gaussian k: wz[z_begin[k] .. z_begin[k + 1])
+    std::vector<float> wz;        ///< vertical weights × normalised mass
+    bool empty() const { return index.empty(); }
+  };
+
+  /** \brief Prepares the (valid) Gaussians of computeFromGaussians() for a vertical lattice of
+   * cells `resolution_z` whose cell 0 starts at height z0, its weights clipped to the lattice
+   * cells [z_lo, z_hi]; `resolution` is the horizontal cell size of the grids it will be
+   * rasterised into. Only the z coordinates of `points` are used. */
+  static void prepareGaussians(const std::vector<Eigen::Vector3f>& points,
+                               const std::vector<float>& sigmas_xy,
+                               const std::vector<float>& sigmas_z,
+                               const std::vector<float>& weights, float resolution,
+                               float resolution_z, float z0, int z_lo, int z_hi,
+                               PreparedGaussians& out);
+
+  /** \brief computeFromGaussians() for prepared Gaussians at the horizontal positions
+   * points[index[k]] (their z is ignored: the prepared vertical weights stand). The grid's
+   * resolutions must be the prepared ones and its vertical cells on the prepared lattice (the
+   * grid's lowest cell is the lattice cell nearest to it); same result as computeFromGaussians()
+   * up to float rounding, mass outside [z_lo, z_hi] of the preparation being lost. Throws
+   * std::invalid_argument on other resolutions. */
+  void computeFromPrepared(const PreparedGaussians& prepared,
+                           const std::vector<Eigen::Vector3f>& points,
+                           const Eigen::Vector3f& centre);
+
   /** \brief σ the density would use for a point at `range` metres. */
   float sigmaAtRange(float range) const;
 

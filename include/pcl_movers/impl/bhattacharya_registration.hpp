@@ -71,8 +71,18 @@ struct BhattacharyaWorkspace {
   std::vector<Eigen::Vector3f> target_points, target_gauss_points;
   std::vector<float> target_sigmas, target_sigmas_xy, target_sigmas_z, target_weights;
   std::vector<SourceLayer> layers;
+  // The source's Gaussians prepared on the target's vertical lattice, for the z shift
+  // prepared_shift (a search on a new target or z shift prepares again).
+  SurfaceDensity::PreparedGaussians prepared;
+  float prepared_shift = 0.f;
   SourceLayer refine[3];
+  // Coarse-to-fine search (setCoarseToFine()): the binned middle layer and target, and the
+  // fine-target revision the binned target was made from.
+  SourceLayer coarse_source, coarse_target;
+  std::uint64_t coarse_target_of = 0;
+  std::vector<float> coarse_scores;
   std::vector<float> scores, block, local;
+  std::vector<char> built;  // yaw layers built in this search (coarse to fine builds on demand)
   // Occlusion pass (setSourceOccluders() / setTargetOccluders()).
   ShadowImage source_shadow, target_shadow;
   std::vector<char> source_keep;
@@ -100,6 +110,25 @@ void buildSourceLayer(SourceLayer& layer, const std::vector<Eigen::Vector3f>& po
                       const std::vector<float>& sigmas_xy, const std::vector<float>& sigmas_z,
                       const std::vector<float>& weights, const SurfaceDensity& target, int nr,
                       int nrz);
+
+/** \brief `prepared` ← the Gaussians prepared (SurfaceDensity::prepareGaussians()) on the
+ * target's vertical lattice, clipped to the cells reached by shifts of ±nrz cells, for points
+ * moved up by z_shift [m]. */
+void prepareSource(SurfaceDensity::PreparedGaussians& prepared,
+                   const std::vector<Eigen::Vector3f>& points, const std::vector<float>& sigmas_xy,
+                   const std::vector<float>& sigmas_z, const std::vector<float>& weights,
+                   const SurfaceDensity& target, int nrz, float z_shift);
+/** \brief buildSourceLayer() from prepared Gaussians at the horizontal positions of `points`
+ * (indexed as when prepared): two axes per Gaussian instead of three. */
+void buildSourceLayer(SourceLayer& layer, const std::vector<Eigen::Vector3f>& points,
+                      const SurfaceDensity::PreparedGaussians& prepared,
+                      const SurfaceDensity& target, int nr, int nrz);
+
+/** \brief `coarse` ← the density `fine` (whose cell (0, 0, 0) is cell (ox, oy, oz) of a lattice)
+ * summed over 2 × 2 horizontal blocks of that lattice (cells 2X, 2X + 1), square roots taken
+ * after summing: the same object at twice the cell size. Its cell (0, 0, 0) is cell
+ * (⌊ox/2⌋, ⌊oy/2⌋, oz) of the binned lattice, so a shift by D binned cells is one of 2D cells. */
+void binLayer(const SurfaceDensity& fine, int ox, int oy, int oz, SourceLayer& coarse);
 
 /** \brief B(d) = Σ_j sqrt(S[j])·sqrt(T[j + o + d]) for d in [dx0,dx1]×[dy0,dy1]×[dz0,dz1],
  * summed directly over the non-zero source cells; out[((dz-dz0)·h + dy-dy0)·w + dx-dx0]. */
@@ -441,9 +470,19 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::search(
                                  w.gauss_sigmas_xy, w.gauss_sigmas_z, w.gauss_weights);
   std::vector<Eigen::Vector3f>& turned = w.turned;
   turned.resize(gauss.size());
-  auto buildLayer = [&](detail::SourceLayer& layer, int r, int rz) {
-    detail::buildSourceLayer(layer, turned, w.gauss_sigmas_xy, w.gauss_sigmas_z, w.gauss_weights,
-                             target, r, rz);
+  int nrz_prepare = 0;
+  // Rotations about z and horizontal shifts leave every Gaussian's vertical cell weights as
+  // they are: they are computed once per search (and z shift), each layer below only evaluates
+  // the two horizontal axes.
+  bool prepared_valid = false;
+  auto buildLayer = [&](detail::SourceLayer& layer, int r, int rz, float z_shift) {
+    if (!prepared_valid || z_shift != w.prepared_shift) {
+      detail::prepareSource(w.prepared, gauss, w.gauss_sigmas_xy, w.gauss_sigmas_z, w.gauss_weights,
+                            target, nrz_prepare, z_shift);
+      w.prepared_shift = z_shift;
+      prepared_valid = true;
+    }
+    detail::buildSourceLayer(layer, turned, w.prepared, target, r, rz);
   };
 
   // ---- search window: translations d of ±nr cells (±nrz in z) around the guess
@@ -451,6 +490,7 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::search(
   const int nrz =
       search_z_ ? std::max(1, static_cast<int>(std::ceil(search_radius_z_ / res_z - 1e-4f))) : 0;
   const int wx = 2 * nr + 1, wz = 2 * nrz + 1;
+  nrz_prepare = nrz;
   const int layers = yaw_samples_ % 2 == 1 ? yaw_samples_ : yaw_samples_ + 1;
   const int mid = (layers - 1) / 2;
   if (static_cast<int>(w.layers.size()) < layers) w.layers.resize(static_cast<std::size_t>(layers));
@@ -461,10 +501,23 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::search(
     for (std::size_t i = 0; i < gauss.size(); ++i)
       turned[i] = rz * (gauss[i] - centroid) + centroid + shift;
   };
-  for (int l = 0; l < layers; ++l) {
+  // Coarse to fine in yaw (setCoarseToFine()): only the middle layer and its two neighbours are
+  // built up front; a layer further out is built when the hill climbing below first reaches it
+  // (the best sample lies on its neighbour layer), which is what a unimodal B(yaw) needs.
+  const bool coarse_to_fine = coarse_to_fine_ && !full_yaw_window_ &&
+                              correlation_method_ != CorrelationMethod::FFT &&
+                              nr >= kCoarseMinRadius;
+  const bool lazy_layers = coarse_to_fine;
+  std::vector<char>& built = w.built;
+  built.assign(static_cast<std::size_t>(layers), 0);
+  auto ensureLayer = [&](int l) {
+    if (built[static_cast<std::size_t>(l)]) return;
     place(static_cast<float>(l - mid) * yaw_step_, Eigen::Vector3f::Zero());
-    buildLayer(w.layers[static_cast<std::size_t>(l)], nr, nrz);
-  }
+    buildLayer(w.layers[static_cast<std::size_t>(l)], nr, nrz, 0.f);
+    built[static_cast<std::size_t>(l)] = 1;
+  };
+  for (int l = 0; l < layers; ++l)
+    if (!lazy_layers || std::abs(l - mid) <= 1) ensureLayer(l);
 
   // scores[((l·wz + dz+nrz)·wx + dy+nr)·wx + dx+nr] = B(d) of layer l; -1: not evaluated.
   std::vector<float>& scores = w.scores;
@@ -473,25 +526,95 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::search(
     return scores[((static_cast<std::size_t>(l) * wz + (dz + nrz)) * wx + (dy + nr)) * wx +
                   (dx + nr)];
   };
+  // The best sample so far (the first in index order among equals, as a scan would find it),
+  // kept up to date by correlateBlock(); findBest() rescans after the FFT wrote a window.
+  int bl = 0, bdz = 0, bdy = 0, bdx = 0;
+  float best = -1.f;
+  std::size_t best_index = 0;
   auto correlateBlock = [&](int l, int dx0, int dx1, int dy0, int dy1) {
     dx0 = std::max(dx0, -nr);
     dy0 = std::max(dy0, -nr);
     dx1 = std::min(dx1, nr);
     dy1 = std::min(dy1, nr);
     if (dx1 < dx0 || dy1 < dy0) return;
+    ensureLayer(l);
     const int bw = dx1 - dx0 + 1, bh = dy1 - dy0 + 1;
     w.block.assign(static_cast<std::size_t>(wz) * bh * bw, 0.f);
     detail::correlateDirect(target, w.layers[static_cast<std::size_t>(l)], dx0, dx1, dy0, dy1, -nrz,
                             nrz, w.block.data());
     for (int dz = -nrz; dz <= nrz; ++dz)
       for (int dy = dy0; dy <= dy1; ++dy)
-        for (int dx = dx0; dx <= dx1; ++dx)
-          at(l, dz, dy, dx) =
+        for (int dx = dx0; dx <= dx1; ++dx) {
+          const float v =
               w.block[(static_cast<std::size_t>(dz + nrz) * bh + (dy - dy0)) * bw + (dx - dx0)];
+          float& slot = at(l, dz, dy, dx);
+          slot = v;
+          const std::size_t index = static_cast<std::size_t>(&slot - scores.data());
+          if (v > best || (v == best && index < best_index)) {
+            best = v;
+            best_index = index;
+            bl = l;
+            bdz = dz;
+            bdy = dy;
+            bdx = dx;
+          }
+        }
   };
   // The whole window of the middle layer: direct sum or FFT, whichever the cost model says is
   // cheaper (or as forced by setCorrelationMethod()).
-  {
+  if (coarse_to_fine) {
+    // Coarse to fine: the whole window at even shifts on 2×2-binned densities (a quarter of the
+    // cells, a quarter of the shifts), then full resolution in a ±2-cell block around each of
+    // the best few coarse maxima (a binned peak can be a runner-up: the blocks decide).
+    last_method_ = CorrelationMethod::Direct;
+    if (w.coarse_target_of != target.revision()) {
+      detail::binLayer(target, 0, 0, 0, w.coarse_target);
+      w.coarse_target_of = target.revision();
+    }
+    const detail::SourceLayer& ml = w.layers[static_cast<std::size_t>(mid)];
+    detail::binLayer(ml.density, ml.ox, ml.oy, ml.oz, w.coarse_source);
+    const int cr = nr / 2, cw = 2 * cr + 1;
+    std::vector<float>& cs = w.coarse_scores;
+    cs.assign(static_cast<std::size_t>(wz) * cw * cw, 0.f);
+    detail::correlateDirect(w.coarse_target.density, w.coarse_source, -cr, cr, -cr, cr, -nrz, nrz,
+                            cs.data());
+    // Best over z shifts, then the local maxima (3×3) in decreasing order.
+    for (int dz = 1; dz < wz; ++dz)
+      for (int i = 0; i < cw * cw; ++i)
+        cs[static_cast<std::size_t>(i)] = std::max(cs[static_cast<std::size_t>(i)],
+                                                   cs[static_cast<std::size_t>(dz) * cw * cw + i]);
+    struct Peak {
+      float value;
+      int x, y;
+    };
+    Peak peaks[kCoarsePeaks];
+    int found = 0;
+    for (int y = 0; y < cw; ++y)
+      for (int x = 0; x < cw; ++x) {
+        const float v = cs[static_cast<std::size_t>(y) * cw + x];
+        if (!(v > 0.f)) continue;
+        bool is_max = true;
+        for (int ny = std::max(0, y - 1); ny <= std::min(cw - 1, y + 1) && is_max; ++ny)
+          for (int nx = std::max(0, x - 1); nx <= std::min(cw - 1, x + 1); ++nx) {
+            const float u = cs[static_cast<std::size_t>(ny) * cw + nx];
+            // Ties go to the first in scan order: deterministic plateaus.
+            if (u > v || (u == v && ny * cw + nx < y * cw + x)) {
+              is_max = false;
+              break;
+            }
+          }
+        if (!is_max) continue;
+        int k = std::min(found, kCoarsePeaks - 1);
+        if (found == kCoarsePeaks && !(v > peaks[k].value)) continue;
+        for (; k > 0 && v > peaks[k - 1].value; --k) peaks[k] = peaks[k - 1];
+        peaks[k] = {v, x - cr, y - cr};
+        found = std::min(found + 1, kCoarsePeaks);
+      }
+    for (int k = 0; k < found; ++k)
+      correlateBlock(mid, 2 * peaks[k].x - 2, 2 * peaks[k].x + 2, 2 * peaks[k].y - 2,
+                     2 * peaks[k].y + 2);
+    if (found == 0) correlateBlock(mid, -2, 2, -2, 2);  // no overlap anywhere: B = 0 at the guess
+  } else {
     const detail::SourceLayer& ml = w.layers[static_cast<std::size_t>(mid)];
     bool use_fft = correlation_method_ == CorrelationMethod::FFT;
     if (correlation_method_ == CorrelationMethod::Auto)
@@ -502,30 +625,32 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::search(
     else
       correlateBlock(mid, -nr, nr, -nr, nr);
   }
-  int bl = 0, bdz = 0, bdy = 0, bdx = 0;
-  float best = -1.f;
   auto findBest = [&]() {
     best = -1.f;
+    best_index = 0;
     for (int l = 0; l < layers; ++l)
       for (int dz = -nrz; dz <= nrz; ++dz)
         for (int dy = -nr; dy <= nr; ++dy)
           for (int dx = -nr; dx <= nr; ++dx)
             if (at(l, dz, dy, dx) > best) {
               best = at(l, dz, dy, dx);
+              best_index = static_cast<std::size_t>(&at(l, dz, dy, dx) - scores.data());
               bl = l;
               bdz = dz;
               bdy = dy;
               bdx = dx;
             }
   };
-  findBest();
+  if (last_method_ == CorrelationMethod::FFT) findBest();
   // The other yaw layers turn the source about its own centroid, which moves the peak little,
   // so they are evaluated in a ±kLocal-cell block around the middle layer's peak (unless
   // setFullYawWindow()), then grown by hill climbing until the best sample's neighbourhood is
   // fully known.
-  constexpr int kLocal = 4;
+  // Coarse to fine: ±2 cells, the hill climbing below grows the blocks where the peak leads.
+  const int kLocal = coarse_to_fine ? 2 : 4;
+  const int mdx = bdx, mdy = bdy;  // the middle layer's peak (bdx, bdy follow the best below)
   for (int l = 0; l < layers; ++l) {
-    if (l == mid) continue;
+    if (l == mid || (lazy_layers && std::abs(l - mid) > 1)) continue;
     if (full_yaw_window_) {
       if (last_method_ == CorrelationMethod::FFT)
         detail::correlateFft(w, target, w.layers[static_cast<std::size_t>(l)], nr, nrz,
@@ -533,21 +658,22 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::search(
       else
         correlateBlock(l, -nr, nr, -nr, nr);
     } else {
-      correlateBlock(l, bdx - kLocal, bdx + kLocal, bdy - kLocal, bdy + kLocal);
+      correlateBlock(l, mdx - kLocal, mdx + kLocal, mdy - kLocal, mdy + kLocal);
     }
   }
-  findBest();
+  if (last_method_ == CorrelationMethod::FFT) findBest();
   for (int iter = 0; iter < 4 * wx; ++iter) {
     bool grew = false;
-    for (int l = std::max(0, bl - 1); l <= std::min(layers - 1, bl + 1); ++l)
-      for (int dy = std::max(-nr, bdy - 1); dy <= std::min(nr, bdy + 1); ++dy)
-        for (int dx = std::max(-nr, bdx - 1); dx <= std::min(nr, bdx + 1); ++dx)
+    const int cl = bl, cy = bdy, cx = bdx;  // this round's best
+    for (int l = std::max(0, cl - 1); l <= std::min(layers - 1, cl + 1); ++l)
+      for (int dy = std::max(-nr, cy - 1); dy <= std::min(nr, cy + 1); ++dy)
+        for (int dx = std::max(-nr, cx - 1); dx <= std::min(nr, cx + 1); ++dx)
           if (at(l, -nrz, dy, dx) < 0.f) {
             correlateBlock(l, dx - 2, dx + 2, dy - 2, dy + 2);
             grew = true;
           }
     if (!grew) break;
-    findBest();
+    if (last_method_ == CorrelationMethod::FFT) findBest();
   }
 
   // Similarity surface for callers (max over z shifts), ix = nr + dx.
@@ -593,7 +719,7 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::search(
     for (int k = 0; k < rl; ++k) {
       place(yaw + static_cast<float>(k - (rl - 1) / 2) * yaw_step_,
             Eigen::Vector3f(dx * res, dy * res, dz * res_z));
-      buildLayer(w.refine[k], 1, rz);
+      buildLayer(w.refine[k], 1, rz, dz * res_z);
       detail::correlateDirect(target, w.refine[k], -1, 1, -1, 1, -rz, rz,
                               &w.local[static_cast<std::size_t>(k) * (2 * rz + 1) * 9]);
     }
@@ -650,8 +776,13 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::search(
     sd.setResolutionZ(res_z);
     sd.setSigmaPerMetre(target.getSigmaPerMetre());
     sd.setMinSigma(target.getMinSigma());
-    sd.computeFromGaussians(turned, w.gauss_sigmas_xy, w.gauss_sigmas_z, w.gauss_weights,
-                            target.getCentre());
+    const float z_shift = dz * res_z;
+    if (!prepared_valid || z_shift != w.prepared_shift) {
+      detail::prepareSource(w.prepared, gauss, w.gauss_sigmas_xy, w.gauss_sigmas_z, w.gauss_weights,
+                            target, nrz, z_shift);
+      w.prepared_shift = z_shift;
+    }
+    sd.computeFromPrepared(w.prepared, turned, target.getCentre());
     keep_source_density = true;
   }
   finish();
