@@ -205,6 +205,20 @@ struct DetectorParameters {
   /// 1 = a confirmed mover whose gated candidate failed registration (low B) keeps that cluster
   /// as its output row without an update, instead of the cluster starting a new track.
   int hold_confirmed = 1;
+  /// Occlusion-aware measurements (0 = off): a cluster side (range image columns) counts as
+  /// occluded when at least this fraction of its boundary cells is bounded by a nearer object
+  /// point (RangeImageRegionGrowing::occludedSides()). The extent there is not the object's and
+  /// changes while it emerges or hides, so its registered position slides: such measurements get
+  /// the range-scaled σ in the reported-velocity filter, and early confirmation waits for an
+  /// unoccluded view.
+  double occluded_fraction = 0.3;
+  /// Re-acquisition after occlusion (0 = off): a track born on a cluster that overlaps the
+  /// predicted extent of a mover lost in the last frames (coasting) starts with that mover's
+  /// velocity (σ `reacquire_velocity_sigma` [m/s]) instead of zero, and skips the line-fit restart
+  /// of velocity_fit_init: its first positions slide while the object emerges from behind the
+  /// occluder that hid it.
+  int reacquire_velocity = 1;
+  double reacquire_velocity_sigma = 1.0;
 
   /** \brief Calls `f(key, member, description)` for every parameter (double, int or string). */
   template <typename F>
@@ -308,6 +322,13 @@ void DetectorParameters::forEachParameter(F&& f) {
     "early confirmation: passed free-space tests needed");
   f("mover_latch", mover_latch, "1 = a confirmed mover stays a mover while tracked");
   f("hold_confirmed", hold_confirmed, "1 = confirmed movers keep low-B clusters (no update)");
+  f("occluded_fraction", occluded_fraction,
+    "min fraction of a cluster side's boundary next to a nearer object to call it occluded "
+    "(0 = off)");
+  f("reacquire_velocity", reacquire_velocity,
+    "1 = a track born where a coasting mover is predicted starts with its velocity");
+  f("reacquire_velocity_sigma", reacquire_velocity_sigma,
+    "velocity sigma of such a re-acquired track [m/s]");
 }
 
 namespace detail {
@@ -436,6 +457,9 @@ inline void DetectorParameters::validate() const {
   if (confirm_false_rate < 0 || confirm_false_rate >= 1)
     throw InputError("parameter confirm_false_rate must be in [0, 1)");
   positive("confirm_sigma_floor", confirm_sigma_floor);
+  if (occluded_fraction < 0 || occluded_fraction > 1)
+    throw InputError("parameter occluded_fraction must be in [0, 1]");
+  positive("reacquire_velocity_sigma", reacquire_velocity_sigma);
   if (confirm_min_similarity < 0 || confirm_min_similarity > 1)
     throw InputError("parameter confirm_min_similarity must be in [0, 1]");
   if (confirm_min_points < 1) throw InputError("parameter confirm_min_points must be >= 1");

@@ -163,7 +163,8 @@ class MoverDetector {
   SensorModel sensor_model_;
   bool has_sensor_model_ = false;
   MoverTracker<PointT> tracker_;
-  FreeSpaceMap free_space_;  ///< recent scans for the tracker's free-space test
+  FreeSpaceMap free_space_;             ///< recent scans for the tracker's free-space test
+  std::vector<std::uint8_t> occluded_;  ///< occluded sides of each cluster (last frame)
   StageObject<RangeImageOrganizer<PointT>> organizer_;
   StageObject<GroundPlaneFilter<PointT>> ground_;
   StageObject<RangeImageRegionGrowing<PointT>> segmenter_;

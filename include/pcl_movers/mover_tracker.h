@@ -14,6 +14,7 @@
 #include <pcl/point_types.h>
 
 #include <Eigen/Geometry>
+#include <cstdint>
 #include <deque>
 #include <limits>
 #include <vector>
@@ -99,15 +100,20 @@ class MoverTracker {
     double min_z = 0, max_z = 0;
     int points = 0;
     bool large = false;  ///< longer/taller than any mover: tracked by centroid, never a mover
+    /// A side of the cluster is bounded by a nearer object (see update()): its extent there is
+    /// not the object's, and its measured position can slide while it emerges or hides.
+    bool occluded = false;
   };
 
   /** \brief One track. Positions and velocities are in the world frame. */
   struct Track {
     int id = 0;
     KalmanFilterCV filter;
-    double z = 0;              ///< height of the reference point (from the last measurement)
-    double last_time = 0;      ///< time of the last update
-    int hits = 0;              ///< updates so far
+    double z = 0;          ///< height of the reference point (from the last measurement)
+    double last_time = 0;  ///< time of the last update
+    int hits = 0;          ///< updates so far
+    /// Born with the velocity of a coasting mover it re-acquires (see reacquire_velocity).
+    bool reacquired = false;
     int age = 0;               ///< frames since birth
     int missed = 0;            ///< consecutive frames without update
     bool mover = false;        ///< mover decision after the last update
@@ -121,6 +127,9 @@ class MoverTracker {
     /// Tallest (not large) view of the object so far [m]: the height test of the mover decision
     /// uses it, as a van seen from straight behind can show a lower cluster than its height.
     double max_height = 0;
+    /// Longest (not large) view of the object so far [m]: how far from the last visible part
+    /// another part of it can reappear (see reacquire_velocity).
+    double max_length = 0;
     std::deque<char> fast;                ///< speed > mover_speed after each of the last updates
     std::deque<Eigen::Vector3d> history;  ///< (x, y, time) of the last measurements
     /// (x, y, time) of the last registered measurements (manoeuvre_window of them), for the
@@ -171,9 +180,12 @@ class MoverTracker {
   /** \brief Processes one frame.
    * \param cloud points in the world frame (may be organized with NaN; only cluster points are
    * read) \param clusters point indices of each object cluster \param sensor_origin sensor position
-   * in the world frame (ranges → density σ) \param time frame time [s], increasing */
+   * in the world frame (ranges → density σ) \param time frame time [s], increasing
+   * \param occluded per cluster, whether a side of it is bounded by a nearer object
+   * (RangeImageRegionGrowing::occludedSides(), non-zero = occluded); empty = unknown (none) */
   void update(const PointCloudConstPtr& cloud, const std::vector<pcl::PointIndices>& clusters,
-              const Eigen::Vector3d& sensor_origin, double time);
+              const Eigen::Vector3d& sensor_origin, double time,
+              const std::vector<std::uint8_t>& occluded = {});
 
   /** \brief Scans for the free-space test (see DetectorParameters::free_space_lag); the map must
    * already hold the current frame's scan when update() is called. nullptr (default) disables the
@@ -279,9 +291,10 @@ class MoverTracker {
    * measurement_sigma_per_metre · `range`), or, when the registration's B (`similarity`) is
    * confident and the track young or manoeuvring (see
    * DetectorParameters::measurement_sigma_from_scatter), the scatter of its recent positions
-   * (this one included) about their line, at least registration_sigma. */
+   * (this one included) about their line, at least registration_sigma. `occluded` views (a side
+   * bounded by a nearer object) keep the prior. */
   double registeredSigma(const Track& track, const Eigen::Vector3d& measurement, double similarity,
-                         double time, double range) const;
+                         bool occluded, double time, double range) const;
 
   /** \brief Clamps the velocity change of `filter` since `v_before` to `limit` [m/s]. */
   static void limitAcceleration(KalmanFilterCV& filter, const Eigen::Vector2d& v_before,
@@ -290,7 +303,7 @@ class MoverTracker {
   /** \brief Records a registered position of `track` (after its tracking filter took it) and
    * updates the track's velocity_filter with it; `since` [s] is the time since the last update. */
   void updateVelocityFilter(Track& track, const Eigen::Vector3d& measurement, double similarity,
-                            double time, double range, double since) const;
+                            bool occluded, double time, double range, double since) const;
 
   /** \brief Updates the mover flag of a track after an update; `points` are the world points of
    * the cluster just assigned (for the free-space test). */

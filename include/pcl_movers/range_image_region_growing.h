@@ -104,6 +104,34 @@ class RangeImageRegionGrowing : public pcl::PCLBase<PointT> {
    * same vector frame after frame avoids reallocating them. */
   void segment(std::vector<pcl::PointIndices>& clusters);
 
+  /** \brief Bits of occludedSides(): the cluster's extent along that image side is cut by a
+   * nearer object. */
+  enum OccludedSide : std::uint8_t { kOccludedLeft = 1, kOccludedRight = 2 };
+
+  /** \brief Which sides (columns) of each cluster are bounded by a nearer object, so that the
+   * visible extent there is not the object's (it continues behind the occluder, and grows or
+   * shrinks as the object emerges or hides).
+   *
+   * A cell of cluster c is a left (right) boundary cell when the first valid cell to its left
+   * (right) in its row, skipping up to `max_gap` empty cells, is not in c. The boundary is
+   * occluded there when that cell is an object point (listed in `objects`) nearer than the
+   * boundary cell by more than the depth rule's threshold max(k · range, d_min) — the cell that
+   * ended the cluster is a closer surface, not background. A side is flagged when at least
+   * `min_fraction` of its boundary cells are occluded (a stray nearer point, like a leaf, does not
+   * flag it). Ranges are measured from the origin (the organized scan is in the sensor frame).
+   * \param[in] organized range image (rows = beams, columns = azimuth)
+   * \param[in] objects indices of the non-ground points (occluders are taken from these)
+   * \param[in] clusters the clusters of segment()
+   * \param[in] k, d_min depth rule of the segmentation
+   * \param[in] max_gap empty cells skipped, as in the segmentation
+   * \param[in] wrap_around whether the first and last column are neighbours
+   * \param[in] min_fraction fraction of a side's boundary cells that must be occluded
+   * \param[out] sides per cluster, a combination of OccludedSide bits */
+  static void occludedSides(const PointCloud& organized, const pcl::Indices& objects,
+                            const std::vector<pcl::PointIndices>& clusters, float k, float d_min,
+                            int max_gap, bool wrap_around, float min_fraction,
+                            std::vector<std::uint8_t>& sides);
+
  protected:
   /** \brief Root of the set holding i, with path halving. */
   int findRoot(int i);

@@ -191,7 +191,15 @@ void MoverDetector<PointT>::process(const PointCloudConstPtr& scan, const Eigen:
   } else {
     tracker_.setFreeSpaceMap(nullptr);
   }
-  tracker_.update(world, world_clusters, pose.translation(), time);
+  // Occluded cluster sides (range image, sensor frame): measurements there can slide.
+  if (p.occluded_fraction > 0)
+    RangeImageRegionGrowing<PointT>::occludedSides(
+        *organized, *objects, clusters, static_cast<float>(p.depth_ratio),
+        static_cast<float>(p.depth_min), p.max_gap, true, static_cast<float>(p.occluded_fraction),
+        occluded_);
+  else
+    occluded_.clear();
+  tracker_.update(world, world_clusters, pose.translation(), time, occluded_);
   const auto t5 = Clock::now();
 
   // Outputs: rows, indices and labels.

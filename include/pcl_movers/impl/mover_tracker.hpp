@@ -255,6 +255,9 @@ bool MoverTracker<PointT>::wellMeasuredMotion(const Track& track) const {
   // a well-sampled object (earlier positions' quality shows in the scatter about the line).
   if (track.similarity < p.confirm_min_similarity || track.features.points < p.confirm_min_points)
     return false;
+  // A view cut by a nearer object is placed by its visible part, which slides while the object
+  // emerges or hides: its line can be straight and wrong.
+  if (track.features.occluded) return false;
   const LineFit fit = fitVelocity(track.history, p.confirm_sigma_floor);
   if (!fit.valid) return false;
   const double speed = fit.velocity.norm();
@@ -312,8 +315,8 @@ void MoverTracker<PointT>::limitAcceleration(KalmanFilterCV& filter,
 
 template <typename PointT>
 void MoverTracker<PointT>::updateVelocityFilter(Track& track, const Eigen::Vector3d& measurement,
-                                                double similarity, double time, double range,
-                                                double since) const {
+                                                double similarity, bool occluded, double time,
+                                                double range, double since) const {
   const auto& p = parameters_;
   track.registered.emplace_back(measurement.x(), measurement.y(), time);
   while (static_cast<int>(track.registered.size()) > p.manoeuvre_window)
@@ -325,7 +328,7 @@ void MoverTracker<PointT>::updateVelocityFilter(Track& track, const Eigen::Vecto
     track.velocity_filter = track.filter;
     return;
   }
-  const double sigma = registeredSigma(track, measurement, similarity, time, range);
+  const double sigma = registeredSigma(track, measurement, similarity, occluded, time, range);
   const Eigen::Vector2d v_before = track.velocity_filter.velocity();
   // The acceleration limit bounds how fast the object's velocity can change, but an update also
   // corrects the estimate's own error, which the filter knows: a young track's estimate may be
@@ -348,7 +351,8 @@ void MoverTracker<PointT>::updateVelocityFilter(Track& track, const Eigen::Vecto
 
 template <typename PointT>
 double MoverTracker<PointT>::registeredSigma(const Track& track, const Eigen::Vector3d& measurement,
-                                             double similarity, double time, double range) const {
+                                             double similarity, bool occluded, double time,
+                                             double range) const {
   const auto& p = parameters_;
   // The range-scaled σ is a bound for far, coarsely sampled objects, not what a registration
   // delivers: the registered positions of a van at 40-80 m scattered by 3-10 cm about their
@@ -360,6 +364,10 @@ double MoverTracker<PointT>::registeredSigma(const Track& track, const Eigen::Ve
   // recedes behind trees, is partly hidden) is placed less precisely than the scatter of the
   // earlier positions says: it keeps the prior.
   if (!(similarity >= p.registration_stop_similarity)) return prior;
+  // So is a view cut by a nearer object: the occluder cuts the object at the same world place in
+  // consecutive scans, which pulls the registration towards no motion while the visible part grows
+  // or shrinks (urban car 4 emerging behind parked cars registered at 1-4 m/s for 8).
+  if (occluded) return prior;
   // But registrations also slide slowly while the view of an object changes (a car passing the
   // sensor, one emerging from behind another), and a filter that trusts every position follows
   // those slides (open truck ±1.6 m/s). The prior keeps smoothing them once the track is
@@ -470,7 +478,8 @@ void MoverTracker<PointT>::decideMover(Track& track,
 template <typename PointT>
 void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
                                   const std::vector<pcl::PointIndices>& clusters,
-                                  const Eigen::Vector3d& sensor_origin, double time) {
+                                  const Eigen::Vector3d& sensor_origin, double time,
+                                  const std::vector<std::uint8_t>& occluded) {
   const auto& p = parameters_;
   const bool use_registration = p.mode != "centroid";
   results_.assign(clusters.size(), ClusterResult());
@@ -496,6 +505,7 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     cand.usable = cand.features.points >= p.min_cluster_points && range <= p.max_range;
     cand.features.large =
         cand.features.length > p.max_mover_length || cand.features.height > p.max_mover_height;
+    cand.features.occluded = occluded.size() == clusters.size() && occluded[c] != 0;
     results_[c].features = cand.features;
   }
 
@@ -705,7 +715,9 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     // vehicle can accelerate (a single bad measurement cannot make a static object a mover).
     if (t.hits >= p.mover_min_age)
       limitAcceleration(t.filter, v_before, p.acceleration_limit * since);
-    if (registered) updateVelocityFilter(t, m.measurement, m.similarity, time, range, since);
+    if (registered)
+      updateVelocityFilter(t, m.measurement, m.similarity, cand.features.occluded, time, range,
+                           since);
     t.z = m.measurement.z();
     t.last_time = time;
     ++t.hits;
@@ -716,12 +728,15 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     t.similarity = m.similarity;
     t.features = cand.features;
     t.centroid_offset = (cand.features.centroid - m.measurement).template head<2>();
-    if (!cand.features.large) t.max_height = std::max(t.max_height, cand.features.height);
+    if (!cand.features.large) {
+      t.max_height = std::max(t.max_height, cand.features.height);
+      t.max_length = std::max(t.max_length, cand.features.length);
+    }
     // Not latched: a far vehicle merged with a hedge for a while must become a candidate again.
     t.large = cand.features.large;
     t.history.emplace_back(m.measurement.x(), m.measurement.y(), time);
     while (static_cast<int>(t.history.size()) > p.mover_window + 1) t.history.pop_front();
-    if (p.velocity_fit_init && registered && t.hits == 3) {
+    if (p.velocity_fit_init && registered && t.hits == 3 && !t.reacquired) {
       // A young track's Kalman velocity converges slowly: its birth position carries
       // registration_sigma while later positions carry the range-scaled σ, so the filter stays
       // anchored on the birth position (a car at 80 m took 10+ frames). At the third
@@ -793,9 +808,11 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
         cand.features.height >= 0.5 * p.min_mover_height) {
       ensurePoints(*cloud, clusters[m.cluster], candidates[m.cluster]);
       t.model = makeModel(candidates[m.cluster], sensor_origin);
+      // A re-acquired track keeps the velocity it inherited (not its centroid velocity).
       t.filter.initialize(cand.features.centroid.template head<2>(),
                           Eigen::Matrix2d::Identity() * meas_sigma * meas_sigma,
-                          Eigen::Vector2d::Zero(), p.initial_velocity_sigma);
+                          t.reacquired ? t.filter.velocity() : Eigen::Vector2d::Zero(),
+                          t.reacquired ? p.reacquire_velocity_sigma : p.initial_velocity_sigma);
       t.centroid_offset.setZero();
       t.velocity_filter = KalmanFilterCV();
       t.registered.clear();
@@ -860,6 +877,7 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
   tracks_ = std::move(kept);
 
   // Births.
+  const std::size_t existing = tracks_.size();
   for (std::size_t c = 0; c < candidates.size(); ++c) {
     auto& cand = candidates[c];
     if (cluster_used[c] || !cand.usable) continue;
@@ -869,15 +887,44 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     t.filter.setAccelerationNoise(p.acceleration_noise);
     const double sigma =
         cand.features.large || !use_registration ? p.centroid_sigma : p.registration_sigma;
+    // Re-acquisition after occlusion: a mover that passed behind an occluder comes back as a
+    // cluster its track cannot take (another part of the object, far from the predicted
+    // centroid, or one that does not register against the model of the part seen before). Its
+    // new track would start at rest and its first velocities, measured while the object emerges
+    // (positions sliding with the growing visible part), were 1-3 m/s for 8 (urban car 4, lost
+    // and re-born four times). The coasting mover's prediction says where that object is and how
+    // fast it goes: a cluster overlapping its predicted extent inherits its velocity.
+    Eigen::Vector2d v0 = Eigen::Vector2d::Zero();
+    double v0_sigma = p.initial_velocity_sigma;
+    if (p.reacquire_velocity && !cand.features.large) {
+      double best = std::numeric_limits<double>::max();
+      for (std::size_t ti = 0; ti < existing; ++ti) {
+        const Track& lost = tracks_[ti];
+        if (lost.missed < 1 || lost.large || !(lost.mover || lost.confirmed)) continue;
+        const double d = (cand.features.centroid.template head<2>() - lost.filter.position() -
+                          lost.centroid_offset)
+                             .norm();
+        // The cluster may be another part of the object than the one last seen (the front
+        // emerging on one side of the occluder after the rear hid on the other).
+        const double reach = std::max(lost.max_length, lost.features.length) +
+                             0.5 * cand.features.length + p.gate_margin;
+        if (d <= reach && d < best) {
+          best = d;
+          v0 = lost.reportedVelocity();
+          v0_sigma = p.reacquire_velocity_sigma;
+          t.reacquired = true;
+        }
+      }
+    }
     t.filter.initialize(cand.features.centroid.template head<2>(),
-                        Eigen::Matrix2d::Identity() * sigma * sigma, Eigen::Vector2d::Zero(),
-                        p.initial_velocity_sigma);
+                        Eigen::Matrix2d::Identity() * sigma * sigma, v0, v0_sigma);
     t.z = cand.features.centroid.z();
     t.last_time = time;
     t.hits = 1;
     t.features = cand.features;
     t.large = cand.features.large;
     t.max_height = cand.features.large ? 0.0 : cand.features.height;
+    t.max_length = cand.features.large ? 0.0 : cand.features.length;
     t.fast.push_back(0);
     t.history.emplace_back(cand.features.centroid.x(), cand.features.centroid.y(), time);
     if (use_registration && !t.large && cand.features.height >= 0.5 * p.min_mover_height) {

@@ -237,6 +237,69 @@ void RangeImageRegionGrowing<PointT>::segment(std::vector<pcl::PointIndices>& cl
   deinitCompute();
 }
 
+template <typename PointT>
+void RangeImageRegionGrowing<PointT>::occludedSides(const PointCloud& organized,
+                                                    const pcl::Indices& objects,
+                                                    const std::vector<pcl::PointIndices>& clusters,
+                                                    float k, float d_min, int max_gap,
+                                                    bool wrap_around, float min_fraction,
+                                                    std::vector<std::uint8_t>& sides) {
+  sides.assign(clusters.size(), 0);
+  const int width = static_cast<int>(organized.width);
+  if (organized.height < 1 || width < 2 ||
+      static_cast<std::size_t>(width) * organized.height != organized.size())
+    return;
+  // Per cell: -2 empty, -1 a non-ground point outside every cluster, else the cluster index.
+  // Ground cells are "valid" (they end a run) but never occluders: -3.
+  const std::size_t n = organized.size();
+  std::vector<int> label(n, -2);
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto& q = organized[i];
+    if (std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z)) label[i] = -3;
+  }
+  for (const auto i : objects)
+    if (i >= 0 && static_cast<std::size_t>(i) < n && label[i] == -3) label[i] = -1;
+  for (std::size_t c = 0; c < clusters.size(); ++c)
+    for (const auto i : clusters[c].indices)
+      if (i >= 0 && static_cast<std::size_t>(i) < n && label[i] != -2)
+        label[i] = static_cast<int>(c);
+  const auto range = [&organized](std::size_t i) { return organized[i].getVector3fMap().norm(); };
+  for (std::size_t c = 0; c < clusters.size(); ++c) {
+    int boundary[2] = {0, 0}, occluded[2] = {0, 0};
+    for (const auto i : clusters[c].indices) {
+      if (i < 0 || static_cast<std::size_t>(i) >= n) continue;
+      const int row = i / width, col = i % width;
+      const float r = range(static_cast<std::size_t>(i));
+      for (int side = 0; side < 2; ++side) {
+        const int step = side == 0 ? -1 : 1;
+        int j = -1;
+        for (int s = 1; s <= max_gap + 1; ++s) {
+          int cc = col + step * s;
+          if (cc < 0 || cc >= width) {
+            if (!wrap_around) break;
+            cc = (cc + width) % width;
+          }
+          const int idx = row * width + cc;
+          if (label[idx] != -2) {
+            j = idx;
+            break;
+          }
+        }
+        if (j >= 0 && label[j] == static_cast<int>(c)) continue;  // inside the cluster
+        ++boundary[side];
+        // Empty beyond the gap, or ground: no nearer surface ends the cluster here.
+        if (j < 0 || label[j] == -3) continue;
+        const float rj = range(static_cast<std::size_t>(j));
+        if (rj < r - std::max(k * rj, d_min)) ++occluded[side];
+      }
+    }
+    for (int side = 0; side < 2; ++side)
+      if (occluded[side] > 0 &&
+          static_cast<float>(occluded[side]) >= min_fraction * static_cast<float>(boundary[side]))
+        sides[c] |= side == 0 ? kOccludedLeft : kOccludedRight;
+  }
+}
+
 }  // namespace pcl_movers
 
 #define PCL_MOVERS_INSTANTIATE_RangeImageRegionGrowing(T) \
