@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <limits>
 #include <vector>
@@ -418,4 +419,41 @@ TEST(RangeImageRegionGrowing, KittiObjectsRecovered) {
   ASSERT_GT(score.instances, 10u);
   // Generous bound; the evaluation command prints the exact rates.
   EXPECT_GT(score.rate(score.recovered), 0.8);
+}
+
+// A car at 20 m partly hidden by a post at 10 m: the car's cluster ends at the post on one side
+// (occluded) and at empty space on the other; the post and a lone box end at empty space only.
+TEST(RangeImageRegionGrowing, OccludedSidesFlagTheSideBoundedByANearerObject) {
+  const std::vector<Box> boxes{Box{{20.f, -2.f, -1.f}, {22.f, 2.f, 0.5f}},    // car
+                               Box{{10.f, 0.8f, -1.f}, {10.5f, 1.4f, 1.5f}},  // post
+                               Box{{-15.f, 3.f, -1.f}, {-13.f, 6.f, 0.5f}}};  // lone box
+  const Cloud::Ptr cloud = rayCast(boxes);
+  const auto clusters = segment(cloud);
+  ASSERT_EQ(clusters.size(), 3u);
+  pcl::Indices objects;
+  for (std::size_t i = 0; i < cloud->size(); ++i)
+    if (std::isfinite((*cloud)[i].x)) objects.push_back(static_cast<int>(i));
+  std::vector<std::uint8_t> sides;
+  RangeImageRegionGrowing<pcl::PointXYZ>::occludedSides(*cloud, objects, clusters, 0.05f, 0.1f, 2,
+                                                        true, 0.3f, sides);
+  ASSERT_EQ(sides.size(), 3u);
+  for (std::size_t c = 0; c < clusters.size(); ++c) {
+    const auto& p = (*cloud)[clusters[c].indices.front()];
+    if (p.x > 15.f) {  // the car: exactly one side occluded
+      EXPECT_TRUE(sides[c] == RangeImageRegionGrowing<pcl::PointXYZ>::kOccludedLeft ||
+                  sides[c] == RangeImageRegionGrowing<pcl::PointXYZ>::kOccludedRight)
+          << int(sides[c]);
+    } else {
+      EXPECT_EQ(sides[c], 0) << "cluster at x " << p.x;
+    }
+  }
+  // The post taken as ground (not in the objects, no cluster): nothing occludes the car.
+  for (const auto& c : clusters) {
+    if (!((*cloud)[c.indices.front()].x > 15.f)) continue;
+    const std::vector<pcl::PointIndices> car{c};
+    RangeImageRegionGrowing<pcl::PointXYZ>::occludedSides(*cloud, c.indices, car, 0.05f, 0.1f, 2,
+                                                          true, 0.3f, sides);
+    ASSERT_EQ(sides.size(), 1u);
+    EXPECT_EQ(sides[0], 0);
+  }
 }

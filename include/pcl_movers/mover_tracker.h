@@ -114,12 +114,14 @@ class MoverTracker {
     int hits = 0;          ///< updates so far
     /// Born with the velocity of a coasting mover it re-acquires (see reacquire_velocity).
     bool reacquired = false;
-    int age = 0;               ///< frames since birth
-    int missed = 0;            ///< consecutive frames without update
-    bool mover = false;        ///< mover decision after the last update
-    bool large = false;        ///< static structure tracked by centroid
-    double similarity = 0;     ///< B of the last update (0 in centroid mode / at birth)
-    ClusterFeatures features;  ///< geometry of the last cluster assigned
+    int occluded_run = 0;        ///< consecutive registered updates of occluded views
+    int unoccluded_updates = 0;  ///< registered updates of unoccluded views so far
+    int age = 0;                 ///< frames since birth
+    int missed = 0;              ///< consecutive frames without update
+    bool mover = false;          ///< mover decision after the last update
+    bool large = false;          ///< static structure tracked by centroid
+    double similarity = 0;       ///< B of the last update (0 in centroid mode / at birth)
+    ClusterFeatures features;    ///< geometry of the last cluster assigned
     /// Cluster centroid minus measured reference point at the last update (x, y): the reference
     /// point stays where the object was first seen while the visible part (and so the centroid)
     /// changes with the view, so candidates are gated against the predicted *centroid*.

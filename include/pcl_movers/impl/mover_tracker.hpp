@@ -715,7 +715,19 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     // vehicle can accelerate (a single bad measurement cannot make a static object a mover).
     if (t.hits >= p.mover_min_age)
       limitAcceleration(t.filter, v_before, p.acceleration_limit * since);
-    if (registered)
+    // An occluded view's registered position slides with its visible part (hiding: towards the
+    // occluder, emerging: away from it, both towards "no motion"), so while the track's velocity
+    // is known from unoccluded views (or inherited on re-acquisition) the reported velocity
+    // coasts through up to occluded_skip such updates instead of following the slide.
+    const bool velocity_known = t.velocity_filter.isInitialized() &&
+                                (t.unoccluded_updates >= p.mover_min_age || t.reacquired);
+    const bool skip_occluded =
+        registered && cand.features.occluded && velocity_known && t.occluded_run < p.occluded_skip;
+    if (registered) {
+      t.occluded_run = cand.features.occluded ? t.occluded_run + 1 : 0;
+      if (!cand.features.occluded) ++t.unoccluded_updates;
+    }
+    if (registered && !skip_occluded)
       updateVelocityFilter(t, m.measurement, m.similarity, cand.features.occluded, time, range,
                            since);
     t.z = m.measurement.z();
@@ -896,7 +908,10 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     // fast it goes: a cluster overlapping its predicted extent inherits its velocity.
     Eigen::Vector2d v0 = Eigen::Vector2d::Zero();
     double v0_sigma = p.initial_velocity_sigma;
-    if (p.reacquire_velocity && !cand.features.large) {
+    // Registration mode only: centroid mode's speed votes read the tracking filter's velocity,
+    // which an inherited velocity would vote for without any evidence (centroid urban: 2 → 8
+    // false alarms).
+    if (p.reacquire_velocity && use_registration && p.fast_from_fit && !cand.features.large) {
       double best = std::numeric_limits<double>::max();
       for (std::size_t ti = 0; ti < existing; ++ti) {
         const Track& lost = tracks_[ti];
