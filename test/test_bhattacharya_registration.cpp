@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <limits>
 #include <random>
@@ -457,11 +458,19 @@ TEST(BhattacharyaRegistration, FftAndDirectGiveTheSameSurface) {
 TEST(BhattacharyaRegistration, CoarseToFineFindsTheExactSearchsOptimum) {
   // The coarse-to-fine search (default) against the exact full-window search on simulated pairs
   // (vehicles and people at 10-60 m, some occluded) from guesses 0-3 m off, with the benchmark's
-  // settings: the same optimum, so the same transformation and B up to float rounding.
-  const auto pairs = pcl_movers::eval::makeSimulatedPairs(40, 3);
+  // settings. The binned translation search keeps the exact search's optimum; the outer yaw
+  // layers are built only when the hill climbing reaches them, a heuristic that misses a better
+  // yaw on about 0.5 % of pairs (10 of 2000 measured: people, whose B barely depends on yaw, and
+  // heavily occluded vehicles with B < 0.75). Rounding differs between CPUs (libm variants), so
+  // which rare pairs differ is machine-dependent: the bound is on their number, with margin.
+  // Any systematic error of the coarse level, the block refinement or the lazy layers shows in
+  // many pairs.
+  const std::size_t n_pairs = 100;
+  const auto pairs = pcl_movers::eval::makeSimulatedPairs(n_pairs, 3);
+  ASSERT_EQ(pairs.size(), n_pairs);
   std::mt19937 rng(4);
   std::uniform_real_distribution<float> u(0.f, 1.f);
-  int coarse_used = 0;
+  int coarse_used = 0, differ = 0, success[2] = {0, 0};
   for (std::size_t i = 0; i < pairs.size(); ++i) {
     const RegistrationPair& p = pairs[i];
     const Eigen::Matrix4f guess =
@@ -483,6 +492,7 @@ TEST(BhattacharyaRegistration, CoarseToFineFindsTheExactSearchsOptimum) {
       result[exact] = reg.getFinalTransformation();
       b[exact] = reg.getSimilarity();
       converged[exact] = reg.hasConverged();
+      success[exact] += pcl_movers::eval::translationError(result[exact], p) < 0.1f;
       // Samples of the middle layer with B > 0: every overlapping shift for the exact search,
       // only those of a few blocks for the coarse-to-fine one.
       const auto& s = reg.getSimilaritySurface();
@@ -491,12 +501,21 @@ TEST(BhattacharyaRegistration, CoarseToFineFindsTheExactSearchsOptimum) {
         for (int x = 0; x < s.nx; ++x) nonzero[exact] += s.at(x, y, 2) > 0.f;
     }
     coarse_used += 4 * nonzero[0] < nonzero[1];
-    EXPECT_EQ(converged[0], converged[1]) << "pair " << i;
-    EXPECT_LT((result[0].block<3, 1>(0, 3) - result[1].block<3, 1>(0, 3)).norm(), 0.005f)
-        << "pair " << i << " (" << p.label << ")";
-    EXPECT_NEAR(b[0], b[1], 1e-3f) << "pair " << i;
+    // Compared where it matters, at the object (a person's yaw is nearly free, so the matrices'
+    // translations can differ by centimetres for the same object position).
+    const Eigen::Vector4f object = p.reference.homogeneous();
+    const float apart = ((result[0] - result[1]) * object).norm();
+    const bool same =
+        converged[0] == converged[1] && std::abs(b[0] - b[1]) < 1e-3f && apart < 0.005f;
+    if (!same) {
+      ++differ;
+      std::printf("pair %zu (%s): coarse-to-fine B %.4f, exact B %.4f, converged %d/%d\n", i,
+                  p.label.c_str(), b[0], b[1], converged[0], converged[1]);
+    }
   }
-  EXPECT_GT(coarse_used, 30);
+  EXPECT_LE(differ, 3) << "of " << n_pairs << " pairs";
+  EXPECT_GE(success[0], success[1] - 1);  // the misses cost at most one success in a hundred
+  EXPECT_GT(coarse_used, 75);
 }
 
 TEST(BhattacharyaRegistration, SubCellAccuracyWithBothPathsAndReCentring) {
