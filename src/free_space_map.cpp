@@ -4,6 +4,8 @@
 #include <pcl_movers/free_space_map.h>
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <stdexcept>
 
 namespace pcl_movers {
@@ -17,6 +19,41 @@ void FreeSpaceMap::setResolution(double azimuth_deg, double elevation_deg) {
   cols_ = static_cast<int>(std::ceil(360.0f / az_res_deg_));
   rows_ = static_cast<int>(std::ceil((max_el_deg_ - min_el_deg_) / el_res_deg_));
   scans_.clear();  // stored images have the old layout
+}
+
+void FreeSpaceMap::computeCells(const float* xs, const float* ys, const float* zs, std::size_t n,
+                                int* cells, float* ranges) const {
+  // Selects only, so that GCC and Clang vectorize the loop (this file is built with
+  // -fno-math-errno -fno-trapping-math: no errno for the square roots, arithmetic may be
+  // evaluated for lanes whose result is then discarded). One condition per select and every value
+  // a float: GCC does not vectorize a select whose mask combines float and int comparisons.
+  // SSE2, four points at a time, halves the time of addScan() on KITTI (3.9 → 1.8 ms); GCC 12
+  // does not vectorize this loop in an AVX2 clone ("control flow in loop").
+  const float min_el = min_el_deg_, inv_el = 1.0f / el_res_deg_, inv_az = 1.0f / az_res_deg_;
+  const float rows = static_cast<float>(rows_), cols = static_cast<float>(cols_);
+  // floor(v) = int(v + kOffset) - kOffset for v > -kOffset: a truncation, which vectorizes
+  // without SSE4.1's round instruction.
+  constexpr float kOffset = 1024.0f;
+  for (std::size_t i = 0; i < n; ++i) {
+    const float x = xs[i], y = ys[i], z = zs[i];
+    const float rxy = std::sqrt(x * x + y * y);
+    const float r = std::sqrt(rxy * rxy + z * z);
+    const float el = (detail::fastAtan2Deg(z, rxy) - min_el) * inv_el;
+    const float az = (detail::fastAtan2Deg(y, x) + 180.0f) * inv_az;
+    // Valid: r in [0.5 m, FLT_MAX] (NaN compares false). Invalid points get row -2 and column 0,
+    // safe values for the conversions to int.
+    float fr = r >= 0.5f ? el : -2.0f;
+    fr = r <= std::numeric_limits<float>::max() ? fr : -2.0f;
+    const float fc = fr >= -1.0f ? az : 0.0f;
+    const float row = static_cast<float>(static_cast<int>(fr + kOffset)) - kOffset;
+    float col = static_cast<float>(static_cast<int>(fc + kOffset)) - kOffset;
+    col = col >= cols ? col - cols : (col < 0.0f ? col + cols : col);
+    // Cell indices stay below 2^24: exact in a float.
+    float cell = row >= 0.0f ? row * cols + col : -1.0f;
+    cell = row < rows ? cell : -1.0f;
+    cells[i] = static_cast<int>(cell);
+    ranges[i] = r;
+  }
 }
 
 FreeSpaceMap::Evidence FreeSpaceMap::test(const std::vector<Eigen::Vector3f>& world_points,

@@ -5,8 +5,10 @@
 #include <pcl_movers/free_space_map.h>
 #include <pcl_movers/mover_tracker.h>
 
+#include <array>
 #include <cmath>
 #include <limits>
+#include <random>
 #include <vector>
 
 namespace {
@@ -244,6 +246,91 @@ TEST(FreeSpaceMap, FastAtan2IsAccurateToAThousandthOfADegree) {
   }
   EXPECT_LT(worst, 1e-3);
   EXPECT_FLOAT_EQ(pcl_movers::detail::fastAtan2Deg(0, 0), 0.0f);
+}
+
+/** Exposes the cell computation of addScan() next to the scalar cell functions of test(). */
+class CellProbe : public pcl_movers::FreeSpaceMap {
+ public:
+  using FreeSpaceMap::computeCells;
+  int cols() const { return cols_; }
+  int rows() const { return rows_; }
+  /** The cell of test(): row and column from the division-based cellRow() / cellCol(), and how
+   * far the direction lies from the nearest row and column edges [cells]. */
+  int scalarCell(float x, float y, float z, float* row_edge, float* col_edge) const {
+    const float rxy = std::sqrt(x * x + y * y);
+    const float el = pcl_movers::detail::fastAtan2Deg(z, rxy);
+    const float az = pcl_movers::detail::fastAtan2Deg(y, x);
+    const float fr = (el - min_el_deg_) / el_res_deg_, fc = (az + 180.0f) / az_res_deg_;
+    *row_edge = std::abs(fr - std::round(fr));
+    *col_edge = std::abs(fc - std::round(fc));
+    const int row = cellRow(el);
+    return row < 0 || row >= rows_ ? -1 : row * cols_ + cellCol(az);
+  }
+};
+
+TEST(FreeSpaceMap, VectorizedCellsMatchTheScalarCells) {
+  // addScan() computes cells in a branch-free loop the compiler vectorizes (reciprocal multiply,
+  // floor by truncation, selects for invalid points); test() looks cells up with cellRow() and
+  // cellCol(). Both must agree, except within float rounding of a cell edge, and invalid points
+  // (NaN, Inf, closer than 0.5 m, outside the elevation rows) must get no cell.
+  CellProbe map;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(-1.f, 1.f);
+  std::vector<float> xs, ys, zs;
+  for (int i = 0; i < 20000; ++i) {
+    const float r = 0.2f + 80.f * std::abs(u(rng));
+    xs.push_back(r * u(rng));
+    ys.push_back(r * u(rng));
+    zs.push_back(r * 0.6f * u(rng));  // elevations beyond the rows (±35°/25°) too
+  }
+  const float inf = std::numeric_limits<float>::infinity();
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const std::vector<std::array<float, 3>> invalid = {
+      {nan, 1.f, 1.f},  {1.f, nan, 1.f}, {1.f, 1.f, nan},    {inf, 0.f, 0.f},
+      {0.f, -inf, 0.f}, {0.f, 0.f, inf}, {0.1f, 0.1f, 0.1f}, {0.f, 0.f, 0.f}};
+  for (const auto& p : invalid) {
+    xs.push_back(p[0]);
+    ys.push_back(p[1]);
+    zs.push_back(p[2]);
+  }
+  // Exactly behind the sensor (azimuth ±180°) and the last column: wrap-around.
+  xs.push_back(-10.f), ys.push_back(0.f), zs.push_back(-1.f);
+  xs.push_back(-10.f), ys.push_back(-1e-6f), zs.push_back(-1.f);
+  const std::size_t n = xs.size();
+  std::vector<int> cells(n);
+  std::vector<float> ranges(n);
+  map.computeCells(xs.data(), ys.data(), zs.data(), n, cells.data(), ranges.data());
+  int with_cell = 0, outside_rows = 0, near_edge_differences = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const float r = std::sqrt(xs[i] * xs[i] + ys[i] * ys[i] + zs[i] * zs[i]);
+    if (!std::isfinite(r) || r < 0.5f) {
+      EXPECT_EQ(cells[i], -1) << "point " << i;
+      continue;
+    }
+    EXPECT_NEAR(ranges[i], r, 1e-4f * r);
+    float row_edge = 0.f, col_edge = 0.f;
+    const int expected = map.scalarCell(xs[i], ys[i], zs[i], &row_edge, &col_edge);
+    ASSERT_GE(cells[i], -1);
+    ASSERT_LT(cells[i], map.rows() * map.cols());
+    if (cells[i] != expected) {
+      // Only a neighbouring row or column, and only across an edge the direction lies on.
+      ++near_edge_differences;
+      const int c = map.cols();
+      if (cells[i] < 0 || expected < 0) {
+        EXPECT_LT(row_edge, 1e-3f) << "point " << i;  // first or last row
+        continue;
+      }
+      const int dr = std::abs(cells[i] / c - expected / c);
+      const int dc = std::abs(cells[i] % c - expected % c);
+      EXPECT_TRUE(dr == 0 || (dr == 1 && row_edge < 1e-3f)) << "point " << i;
+      EXPECT_TRUE(dc == 0 || ((dc == 1 || dc == c - 1) && col_edge < 1e-3f)) << "point " << i;
+    }
+    with_cell += cells[i] >= 0;
+    outside_rows += expected < 0;
+  }
+  EXPECT_GT(with_cell, 10000);
+  EXPECT_GT(outside_rows, 1000);
+  EXPECT_LT(near_edge_differences, 20);
 }
 
 TEST(FreeSpaceMap, FreeSpaceVotesAccumulateWithTheSpeedVotes) {

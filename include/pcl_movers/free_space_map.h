@@ -6,6 +6,7 @@
 #include <pcl/point_cloud.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <deque>
 #include <memory>
@@ -83,6 +84,10 @@ class FreeSpaceMap {
     Eigen::Isometry3f world_to_sensor = Eigen::Isometry3f::Identity();
     std::vector<float> range;  ///< 0 = no return
   };
+  /** \brief cells[i] = row · cols + column of the direction of point i (sensor frame), or -1
+   * (not finite, under 0.5 m, outside the rows); ranges[i] = its range. */
+  void computeCells(const float* xs, const float* ys, const float* zs, std::size_t n, int* cells,
+                    float* ranges) const;
   int cellRow(float elevation_deg) const {
     return static_cast<int>(std::floor((elevation_deg - min_el_deg_) / el_res_deg_));
   }
@@ -104,12 +109,12 @@ class FreeSpaceMap {
 // ----------------------------------------------------------------------------- implementation
 namespace detail {
 /** \brief atan2 in degrees, |error| < 0.001° (cells are 0.2°): std::atan2 on every point of
- * every scan would cost more than the rest of the map. */
+ * every scan would cost more than the rest of the map. Branch-free. */
 inline float fastAtan2Deg(float y, float x) {
   const float ax = std::abs(x), ay = std::abs(y);
   const float mx = ax > ay ? ax : ay, mn = ax > ay ? ay : ax;
-  if (mx == 0.0f) return 0.0f;
-  const float a = mn / mx, s = a * a;
+  // Selects, no branches: the loop of computeCells() vectorizes. atan2(0, 0) = 0.
+  const float a = mn / (mx > 0.0f ? mx : 1.0f), s = a * a;
   float r =
       a * (0.99997726f +
            s * (-0.33262347f +
@@ -131,16 +136,26 @@ void FreeSpaceMap::addScan(const pcl::PointCloud<PointT>& scan, const Eigen::Iso
   }
   s.world_to_sensor = pose.inverse().cast<float>();
   s.range.assign(static_cast<std::size_t>(rows_) * cols_, 0.0f);
-  for (const auto& p : scan.points) {
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
-    const float rxy = std::sqrt(p.x * p.x + p.y * p.y);
-    const float r = std::sqrt(rxy * rxy + p.z * p.z);
-    if (r < 0.5f) continue;
-    const int row = cellRow(detail::fastAtan2Deg(p.z, rxy));
-    if (row < 0 || row >= rows_) continue;
-    const int col = cellCol(detail::fastAtan2Deg(p.y, p.x));
-    float& cell = s.range[static_cast<std::size_t>(row) * cols_ + col];
-    if (cell == 0.0f || r < cell) cell = r;
+  // In blocks: the coordinates copied out of the point structs, the cells computed by a loop
+  // that vectorizes (computeCells()), then the nearest range kept per cell.
+  constexpr std::size_t kBlock = 512;
+  alignas(64) float xs[kBlock], ys[kBlock], zs[kBlock], ranges[kBlock];
+  alignas(64) int cells[kBlock];
+  const std::size_t n = scan.points.size();
+  for (std::size_t first = 0; first < n; first += kBlock) {
+    const std::size_t m = std::min(kBlock, n - first);
+    for (std::size_t i = 0; i < m; ++i) {
+      const PointT& p = scan.points[first + i];
+      xs[i] = p.x;
+      ys[i] = p.y;
+      zs[i] = p.z;
+    }
+    computeCells(xs, ys, zs, m, cells, ranges);
+    for (std::size_t i = 0; i < m; ++i) {
+      if (cells[i] < 0) continue;
+      float& cell = s.range[static_cast<std::size_t>(cells[i])];
+      if (cell == 0.0f || ranges[i] < cell) cell = ranges[i];
+    }
   }
   scans_.push_front(std::move(s));
 }

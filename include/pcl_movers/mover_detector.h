@@ -168,6 +168,7 @@ class MoverDetector {
   StageObject<RangeImageOrganizer<PointT>> organizer_;
   StageObject<GroundPlaneFilter<PointT>> ground_;
   StageObject<RangeImageRegionGrowing<PointT>> segmenter_;
+  StageObject<PointCloud> organized_buffer_;  ///< the last range image, reused when released
   std::vector<std::pair<std::string, double>> timings_;
 };
 

@@ -48,7 +48,15 @@ typename MoverDetector<PointT>::PointCloudConstPtr MoverDetector<PointT>::organi
     has_sensor_model_ = true;
     organizer_.object.reset();
   }
-  PointCloudPtr organized(new PointCloud);
+  // The previous frame's range image is written over when neither the caller nor a stage holds
+  // it any more: no allocation, page faults and construction of ~140k points per HDL-64E frame.
+  if (ground_.object) ground_.object->setInputCloud(PointCloudConstPtr());
+  if (segmenter_.object) segmenter_.object->setInputCloud(PointCloudConstPtr());
+  PointCloudPtr organized = organized_buffer_.object;
+  if (!organized || organized.use_count() > 2) {  // held elsewhere besides these two handles
+    organized.reset(new PointCloud);
+    organized_buffer_.object = organized;
+  }
 #ifdef PCL_MOVERS_HAVE_ORGANIZER
   // Kept between frames: its row lookup is built once per sensor model, not once per scan.
   if (!organizer_.object) {
