@@ -172,43 +172,57 @@ double median(std::vector<float> v) {
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-Result run(const Method& method, const std::vector<RegistrationPair>& pairs,
-           const std::vector<Trial>& trials) {
-  Result r;
+/** Every method on every trial, the methods taking turns on each trial: the machine's speed
+ * drifts over a run (other load, frequency), and interleaving exposes every method to the same
+ * drift, so the time ratios between methods stay fair. */
+std::vector<Result> runAll(const std::vector<Method>& methods,
+                           const std::vector<RegistrationPair>& pairs,
+                           const std::vector<Trial>& trials) {
+  std::vector<Result> results(methods.size());
   Cloud out;
   for (const Trial& t : trials) {
     const RegistrationPair& p = pairs[t.pair];
-    auto reg = method.make();
     const Eigen::Matrix4f guess = pcl_movers::eval::perturbedGuess(p, t.offset, t.angle);
-    if (auto* gicp =
-            dynamic_cast<pcl::GeneralizedIterativeClosestPoint<pcl::PointXYZ, pcl::PointXYZ>*>(
-                reg.get())) {
-      // GICP's covariances need k < points, else it reads past its neighbour lists and crashes.
-      const int n = static_cast<int>(std::min(p.source->size(), p.target->size()));
-      gicp->setCorrespondenceRandomness(std::min(20, n - 1));
-    }
-    const double start = pcl_movers_bench::threadCpuMs();
-    reg->setInputSource(p.source);
-    reg->setInputTarget(p.target);
-    if (method.occluders)
-      if (auto* b =
-              dynamic_cast<pcl_movers::BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ>*>(
+    for (std::size_t m = 0; m < methods.size(); ++m) {
+      const Method& method = methods[m];
+      Result& r = results[m];
+      auto reg = method.make();
+      if (auto* gicp =
+              dynamic_cast<pcl::GeneralizedIterativeClosestPoint<pcl::PointXYZ, pcl::PointXYZ>*>(
                   reg.get())) {
-        b->setSourceOccluders(p.source_occluders);
-        b->setTargetOccluders(p.target_occluders);
+        // GICP's covariances need k < points, else it reads past its neighbour lists and
+        // crashes.
+        const int n = static_cast<int>(std::min(p.source->size(), p.target->size()));
+        gicp->setCorrespondenceRandomness(std::min(20, n - 1));
       }
-    reg->align(out, guess);
-    const double ms = pcl_movers_bench::threadCpuMs() - start;
-    const Eigen::Matrix4f est = reg->getFinalTransformation();
-    r.err.push_back(pcl_movers::eval::translationError(est, p));
-    r.yaw_err.push_back(pcl_movers::eval::yawError(est, p) * 180.f / kPi);
-    r.ms.push_back(static_cast<float>(ms));
-    r.bin.push_back(binOf(t.offset));
-    auto* br = dynamic_cast<pcl_movers::BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ>*>(
-        reg.get());
-    r.similarity.push_back(br ? br->getSimilarity() : 0.f);
+      const double start = pcl_movers_bench::threadCpuMs();
+      reg->setInputSource(p.source);
+      reg->setInputTarget(p.target);
+      if (method.occluders)
+        if (auto* b =
+                dynamic_cast<pcl_movers::BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ>*>(
+                    reg.get())) {
+          b->setSourceOccluders(p.source_occluders);
+          b->setTargetOccluders(p.target_occluders);
+        }
+      reg->align(out, guess);
+      const double ms = pcl_movers_bench::threadCpuMs() - start;
+      const Eigen::Matrix4f est = reg->getFinalTransformation();
+      r.err.push_back(pcl_movers::eval::translationError(est, p));
+      r.yaw_err.push_back(pcl_movers::eval::yawError(est, p) * 180.f / kPi);
+      r.ms.push_back(static_cast<float>(ms));
+      r.bin.push_back(binOf(t.offset));
+      auto* br = dynamic_cast<pcl_movers::BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ>*>(
+          reg.get());
+      r.similarity.push_back(br ? br->getSimilarity() : 0.f);
+    }
   }
-  return r;
+  return results;
+}
+
+Result run(const Method& method, const std::vector<RegistrationPair>& pairs,
+           const std::vector<Trial>& trials) {
+  return runAll({method}, pairs, trials).front();
 }
 
 std::string pct(int ok, int n) {
@@ -222,8 +236,7 @@ void table(const std::string& title, const std::vector<Method>& ms,
            const std::vector<RegistrationPair>& pairs, float threshold, unsigned seed,
            std::vector<Result>& results) {
   const auto trials = makeTrials(pairs.size(), seed);
-  results.clear();
-  for (const auto& m : ms) results.push_back(run(m, pairs, trials));
+  results = runAll(ms, pairs, trials);
   std::printf("\n### %s\n\n", title.c_str());
   std::printf(
       "%zu pairs, one initial guess each; success = translation error < %.2f m at the object "
@@ -284,7 +297,8 @@ int report() {
       "(bins of the offset below). Errors are measured at the object centre; time is one "
       "`align()` including the method's own set-up (kd-tree, NDT grid, densities), "
       "measured as thread CPU time (the machine is shared, wall time would measure the load), one "
-      "thread.\n\n");
+      "thread. The methods take turns on every trial, so a drift of the machine's speed during the "
+      "run affects them alike.\n\n");
   std::printf("| method | settings |\n|---|---|\n");
   for (const auto& m : ms) std::printf("| %s | %s |\n", m.name.c_str(), m.settings.c_str());
 
@@ -490,8 +504,10 @@ int quick(const char* dump) {
   auto summary = [&](const char* set, const std::vector<RegistrationPair>& pairs, float threshold,
                      unsigned seed) {
     const auto trials = makeTrials(pairs.size(), seed);
-    for (const auto& m : ms) {
-      const Result r = run(m, pairs, trials);
+    const std::vector<Result> results = runAll(ms, pairs, trials);
+    for (std::size_t k = 0; k < ms.size(); ++k) {
+      const Method& m = ms[k];
+      const Result& r = results[k];
       int ok = 0, ok25 = 0, n25 = 0;
       double total = 0.0;
       for (std::size_t i = 0; i < r.err.size(); ++i) {
@@ -512,6 +528,10 @@ int quick(const char* dump) {
           pct(ok25, n25).c_str(), median(r.err), median(r.ms),
           total / std::max<std::size_t>(1, r.ms.size()));
     }
+    // ms = {BR 1 yaw, BR 5 yaws, ICP, NDT, BR 5 yaws with occluders}
+    std::printf("%-9s | median time ratios: NDT / BR 5 yaws %.1fx, ICP / BR 5 yaws %.1fx\n", set,
+                median(results[3].ms) / median(results[1].ms),
+                median(results[2].ms) / median(results[1].ms));
   };
   const auto sim = pcl_movers::eval::makeSimulatedPairs(300, 7);
   summary("simulated", sim, 0.1f, 11);
@@ -860,6 +880,7 @@ void BM_TrackerPattern(benchmark::State& state) {
     reg.setSigmaPerMetre(0.005f);
     reg.setMinSigma(0.1f);
     reg.setMinSimilarity(0.3f);
+    reg.setComputeSourceDensity(true);
     const Eigen::Vector3f centre = track.model->getCentre();
     Eigen::Matrix4f guess = Eigen::Matrix4f::Identity();
     guess(0, 3) = centre.x() - cand.predicted.x();

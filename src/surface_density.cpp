@@ -28,8 +28,16 @@ class ErfTable {
   static constexpr int kPerUnit = 512;
   static constexpr float kMax = 5.f;
   ErfTable() {
-    for (int i = 0; i < kSize; ++i)
-      v_[i] = static_cast<float>(std::erf(static_cast<double>(i) / kPerUnit));
+    float v[kSize + 1];
+    for (int i = 0; i <= kSize; ++i)
+      v[i] = static_cast<float>(std::erf(static_cast<double>(i) / kPerUnit));
+    // Each entry holds the value and the step to the next one, side by side: one 8-byte load
+    // per lookup instead of two scattered ones (the steps are the same float differences the
+    // interpolation would compute, so the results do not change).
+    for (int i = 0; i < kSize; ++i) {
+      vd_[2 * i] = v[i];
+      vd_[2 * i + 1] = v[i + 1] - v[i];
+    }
   }
   float operator()(float x) const {
     const float ax = std::abs(x) * kPerUnit;
@@ -37,7 +45,7 @@ class ErfTable {
     if (ax < kMax * kPerUnit) {
       const int i = static_cast<int>(ax);
       const float f = ax - static_cast<float>(i);
-      y = v_[i] + f * (v_[i + 1] - v_[i]);
+      y = vd_[2 * i] + f * vd_[2 * i + 1];
     }
     return x < 0.f ? -y : y;
   }
@@ -51,18 +59,23 @@ class ErfTable {
     const __m128i i = _mm_and_si128(_mm_cvttps_epi32(ax), _mm_castps_si128(inside));
     alignas(16) int idx[4];
     _mm_store_si128(reinterpret_cast<__m128i*>(idx), i);
-    const __m128 a = _mm_setr_ps(v_[idx[0]], v_[idx[1]], v_[idx[2]], v_[idx[3]]);
-    const __m128 b = _mm_setr_ps(v_[idx[0] + 1], v_[idx[1] + 1], v_[idx[2] + 1], v_[idx[3] + 1]);
+    const auto pair = [this](int k) {
+      return reinterpret_cast<const __m64*>(vd_ + 2 * static_cast<std::ptrdiff_t>(k));
+    };
+    const __m128 p01 = _mm_loadh_pi(_mm_loadl_pi(_mm_setzero_ps(), pair(idx[0])), pair(idx[1]));
+    const __m128 p23 = _mm_loadh_pi(_mm_loadl_pi(_mm_setzero_ps(), pair(idx[2])), pair(idx[3]));
+    const __m128 a = _mm_shuffle_ps(p01, p23, _MM_SHUFFLE(2, 0, 2, 0));
+    const __m128 d = _mm_shuffle_ps(p01, p23, _MM_SHUFFLE(3, 1, 3, 1));
     const __m128 f = _mm_sub_ps(ax, _mm_cvtepi32_ps(i));
-    __m128 y = _mm_add_ps(a, _mm_mul_ps(f, _mm_sub_ps(b, a)));
+    __m128 y = _mm_add_ps(a, _mm_mul_ps(f, d));
     y = _mm_or_ps(_mm_and_ps(inside, y), _mm_andnot_ps(inside, _mm_set1_ps(1.f)));
     return _mm_xor_ps(y, _mm_and_ps(_mm_cmplt_ps(x, _mm_setzero_ps()), sign));
   }
 #endif
 
  private:
-  static constexpr int kSize = static_cast<int>(kMax) * kPerUnit + 2;
-  float v_[kSize];
+  static constexpr int kSize = static_cast<int>(kMax) * kPerUnit + 1;
+  alignas(16) float vd_[2 * kSize];
 };
 
 // At namespace scope (built before main()): a function-local static would cost a guard check on
@@ -247,83 +260,95 @@ void SurfaceDensity::computeFromGaussians(const std::vector<Eigen::Vector3f>& po
         "SurfaceDensity::computeFromGaussians: points, sigmas and weights differ in size");
   if (!(resolution_ > 0.f) || !(resolution_z_ > 0.f))
     throw std::invalid_argument("SurfaceDensity: resolutions must be positive");
-  centre_ = centre;
-  std::fill(data_.begin(), data_.end(), 0.f);
-
-  auto valid = [&](std::size_t i) {
-    return points[i].allFinite() && sigmas_xy[i] > 0.f && std::isfinite(sigmas_xy[i]) &&
-           sigmas_z[i] > 0.f && std::isfinite(sigmas_z[i]) &&
-           (weights.empty() || (weights[i] > 0.f && std::isfinite(weights[i])));
-  };
-  double total_weight = 0.0;
-  for (std::size_t i = 0; i < points.size(); ++i)
-    if (valid(i)) total_weight += weights.empty() ? 1.0 : static_cast<double>(weights[i]);
-  if (!(total_weight > 0.0)) {
-    updateSqrt();
-    return;
-  }
-  const float unit_mass = static_cast<float>(1.0 / total_weight);
-  // Lower corner of cell 0 on each axis.
-  const float ox = centre.x() - 0.5f * nx_ * resolution_;
-  const float oy = centre.y() - 0.5f * ny_ * resolution_;
-  const float oz = centre.z() - 0.5f * nz_ * resolution_z_;
-  AxisWeights wx, wy, wz;
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    if (!valid(i)) continue;
-    const Eigen::Vector3f& p = points[i];
-    const float mass = weights.empty() ? unit_mass : unit_mass * weights[i];
-    // Separable Gaussian: the 3D cell integral is the product of three 1D cell integrals.
-    axisWeights(p.z(), sigmas_z[i], oz, resolution_z_, nz_, wz);
-    if (wz.count == 0) continue;
-    axisWeights(p.y(), sigmas_xy[i], oy, resolution_, ny_, wy);
-    if (wy.count == 0) continue;
-    axisWeights(p.x(), sigmas_xy[i], ox, resolution_, nx_, wx);
-    if (wx.count == 0) continue;
-    const float* __restrict wxw = wx.w;
-    for (int kz = 0; kz < wz.count; ++kz) {
-      const float fz = mass * wz.w[kz];
-      for (int ky = 0; ky < wy.count; ++ky) {
-        const float fzy = fz * wy.w[ky];
-        float* __restrict row = &data_[index(wx.first, wy.first + ky, wz.first + kz)];
-        for (int kx = 0; kx < wx.count; ++kx) row[kx] += fzy * wxw[kx];
-      }
-    }
-  }
-  updateSqrt();
+  // The vertical weights on this grid's own z cells, then the horizontal pass of
+  // computeFromPrepared(): one rasterisation code path for every density.
+  thread_local PreparedGaussians prepared;
+  const float z0 = centre.z() - 0.5f * static_cast<float>(nz_) * resolution_z_;
+  prepareGaussians(points, sigmas_xy, sigmas_z, weights, resolution_, resolution_z_, z0, 0, nz_ - 1,
+                   prepared);
+  computeFromPrepared(prepared, points, centre);
 }
 
 namespace {
+/** std::floor for |x| < 2^22 without the libm call that SSE2 code gets for it (a tenth of
+ * preparedAxisWeights()): truncate, then step down where truncation rounded up. */
+inline float floorSmall(float x) {
+  const float t = static_cast<float>(static_cast<int>(x));
+  return t > x ? t - 1.f : t;
+}
+
 /** axisWeights() for a Gaussian at u cells from the lower bound of cell 0, with a = cell / (√2 σ)
- * and reach = 3σ / cell precomputed, over cells [0, n - 1]: the same window and normalisation.
- * `e` needs room for n + 5 values; returns the number of cells (0: the Gaussian misses). */
-inline int preparedAxisWeights(float u, float a, float reach, int n, int& first, float* e) {
-  const float lo = std::floor(u - reach);
-  const float hi = std::floor(u + reach);
+ * and reach = 3σ / cell precomputed, over cells [0, n - 1]: the same window, but the weights are
+ * left unnormalised (differences of erf) and the window's mass (their normaliser) is returned in
+ * `total`, for the caller to fold into its product (one division per Gaussian, not per axis). `e`
+ * needs room for n + 8 values and gets zeros from the returned count up to the next multiple of
+ * four. Returns the number of cells (0: the Gaussian misses). */
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+inline int
+preparedAxisWeights(float u, float a, float reach, int n, int& first, float* e, float& total) {
+  const float a_lo = u - reach, a_hi = u + reach;
   // Written so that NaN and infinite positions fail too.
-  if (!(hi >= 0.f) || !(lo <= static_cast<float>(n - 1))) return 0;
+  if (!(a_hi >= 0.f) || !(a_lo < static_cast<float>(n))) return 0;
+  constexpr float kSmall = 4194304.f;  // 2^22
+  const bool small = a_lo > -kSmall && a_hi < kSmall;
+  const float lo = small ? floorSmall(a_lo) : std::floor(a_lo);
+  const float hi = small ? floorSmall(a_hi) : std::floor(a_hi);
   first = static_cast<int>(std::max(lo, 0.f));
   const int last = static_cast<int>(std::min(hi, static_cast<float>(n - 1)));
-  const int count = last - first + 2;  // boundaries
-  int k = 0;
+  const int cells = last - first + 1;
+  const int count = cells + 1;       // boundaries
+  float e_first = 0.f, e_end = 0.f;  // erf at the first and the last boundary
 #ifdef __SSE2__
-  {
-    const __m128 va = _mm_set1_ps(a), vu = _mm_set1_ps(u);
-    for (; k < count; k += 4) {
-      const __m128 fi =
-          _mm_cvtepi32_ps(_mm_add_epi32(_mm_set1_epi32(first + k), _mm_setr_epi32(0, 1, 2, 3)));
-      _mm_storeu_ps(e + k, g_erf_table.eval4(_mm_mul_ps(_mm_sub_ps(fi, vu), va)));
-    }
+  const __m128 va = _mm_set1_ps(a), vu = _mm_set1_ps(u);
+  auto boundaries = [&](int k) {
+    const __m128 fi =
+        _mm_cvtepi32_ps(_mm_add_epi32(_mm_set1_epi32(first + k), _mm_setr_epi32(0, 1, 2, 3)));
+    return g_erf_table.eval4(_mm_mul_ps(_mm_sub_ps(fi, vu), va));
+  };
+  if (count <= 8) {
+    // The usual window (σ up to about one cell): the boundaries stay in two registers and the
+    // differences come from shuffles, without a round trip through memory.
+    const __m128 v0 = boundaries(0);
+    const __m128 v1 = count > 4 ? boundaries(4) : _mm_setzero_ps();
+    // [e1 e2 e3 e4] and [e5 e6 e7 e7]
+    const __m128 s0 =
+        _mm_shuffle_ps(_mm_move_ss(v0, v1), _mm_move_ss(v0, v1), _MM_SHUFFLE(0, 3, 2, 1));
+    const __m128 s1 = _mm_shuffle_ps(v1, v1, _MM_SHUFFLE(3, 3, 2, 1));
+    const __m128i nc = _mm_set1_epi32(cells);
+    const __m128 m0 = _mm_castsi128_ps(_mm_cmplt_epi32(_mm_setr_epi32(0, 1, 2, 3), nc));
+    const __m128 m1 = _mm_castsi128_ps(_mm_cmplt_epi32(_mm_setr_epi32(4, 5, 6, 7), nc));
+    _mm_storeu_ps(e, _mm_and_ps(m0, _mm_sub_ps(s0, v0)));
+    _mm_storeu_ps(e + 4, _mm_and_ps(m1, _mm_sub_ps(s1, v1)));
+    alignas(16) float b[8];
+    _mm_store_ps(b, v0);
+    _mm_store_ps(b + 4, v1);
+    e_first = b[0];
+    e_end = b[cells];
+  } else {
+    for (int k = 0; k < count; k += 4) _mm_storeu_ps(e + k, boundaries(k));
+    e_first = e[0];
+    e_end = e[cells];
+    int k = 0;
+    for (; k + 4 <= cells; k += 4)
+      _mm_storeu_ps(e + k, _mm_sub_ps(_mm_loadu_ps(e + k + 1), _mm_loadu_ps(e + k)));
+    for (; k < cells; ++k) e[k] = e[k + 1] - e[k];
+    for (k = cells; k < ((cells + 3) & ~3); ++k) e[k] = 0.f;
   }
+#else
+  for (int k = 0; k < count; ++k) e[k] = fastErf((static_cast<float>(first + k) - u) * a);
+  e_first = e[0];
+  e_end = e[cells];
+  for (int k = 0; k < cells; ++k) e[k] = e[k + 1] - e[k];
+  for (int k = cells; k < ((cells + 3) & ~3); ++k) e[k] = 0.f;
 #endif
-  for (; k < count; ++k) e[k] = fastErf((static_cast<float>(first + k) - u) * a);
-  const float e_lo = lo == static_cast<float>(first) ? e[0] : fastErf((lo - u) * a);
-  const float e_hi =
-      hi == static_cast<float>(last) ? e[last - first + 1] : fastErf((hi + 1.f - u) * a);
-  const float total = e_hi - e_lo;
+  // Mass of the whole (unclipped) window, to normalise: the weights telescope to its two ends.
+  const float e_lo = lo == static_cast<float>(first) ? e_first : fastErf((lo - u) * a);
+  const float e_hi = hi == static_cast<float>(last) ? e_end : fastErf((hi + 1.f - u) * a);
+  total = e_hi - e_lo;
   if (!(total > 0.f)) return 0;
-  const float scale = 1.f / total;
-  for (k = 0; k <= last - first; ++k) e[k] = (e[k + 1] - e[k]) * scale;
-  return last - first + 1;
+  return cells;
 }
 }  // namespace
 
@@ -363,21 +388,40 @@ void SurfaceDensity::prepareGaussians(const std::vector<Eigen::Vector3f>& points
   // The lattice cells [z_lo, z_hi] as a grid of its own (cell 0 = z_lo) for axisWeights().
   const int nz = z_hi - z_lo + 1;
   const float oz = z0 + static_cast<float>(z_lo) * resolution_z;
+  // Sized for every Gaussian and trimmed at the end: stores by index instead of a push_back
+  // (with its capacity check) per value; the capacity stays between calls.
+  const std::size_t n = points.size();
+  out.index.resize(n);
+  out.a_xy.resize(n);
+  out.reach_xy.resize(n);
+  out.z_first.resize(n);
+  out.z_begin.resize(n + 1);
+  out.wz.resize(n * static_cast<std::size_t>(nz));
+  std::size_t m = 0, used = 0;
+  const float root2 = std::sqrt(2.f);
   AxisWeights wz;
-  for (std::size_t i = 0; i < points.size(); ++i) {
+  for (std::size_t i = 0; i < n; ++i) {
     if (!valid(i)) continue;
     axisWeights(points[i].z(), sigmas_z[i], oz, resolution_z, nz, wz);
     if (wz.count == 0) continue;
     const float mass = weights.empty() ? unit_mass : unit_mass * weights[i];
-    out.index.push_back(static_cast<int>(i));
-    out.a_xy.push_back(resolution / (std::sqrt(2.f) * sigmas_xy[i]));
-    out.reach_xy.push_back(3.f * sigmas_xy[i] / resolution);
-    out.z_first.push_back(z_lo + wz.first);
-    for (int k = 0; k < wz.count; ++k) out.wz.push_back(mass * wz.w[k]);
-    out.z_begin.push_back(static_cast<int>(out.wz.size()));
+    out.index[m] = static_cast<int>(i);
+    out.a_xy[m] = resolution / (root2 * sigmas_xy[i]);
+    out.reach_xy[m] = 3.f * sigmas_xy[i] / resolution;
+    out.z_first[m] = z_lo + wz.first;
+    for (int k = 0; k < wz.count; ++k) out.wz[used + static_cast<std::size_t>(k)] = mass * wz.w[k];
+    used += static_cast<std::size_t>(wz.count);
+    out.z_begin[m + 1] = static_cast<int>(used);
     out.z_min = std::min(out.z_min, z_lo + wz.first);
     out.z_max = std::max(out.z_max, z_lo + wz.first + wz.count - 1);
+    ++m;
   }
+  out.index.resize(m);
+  out.a_xy.resize(m);
+  out.reach_xy.resize(m);
+  out.z_first.resize(m);
+  out.z_begin.resize(m + 1);
+  out.wz.resize(used);
 }
 
 void SurfaceDensity::computeFromPrepared(const PreparedGaussians& g,
@@ -390,9 +434,16 @@ void SurfaceDensity::computeFromPrepared(const PreparedGaussians& g,
   std::fill(data_.begin(), data_.end(), 0.f);
   const float ox = centre.x() - 0.5f * nx_ * resolution_;
   const float oy = centre.y() - 0.5f * ny_ * resolution_;
-  // Lattice index of this grid's lowest cell.
-  const int oz = static_cast<int>(
-      std::lround((centre.z() - 0.5f * nz_ * resolution_z_ - g.z0) / resolution_z_));
+  // Lattice index of this grid's lowest cell (a grid centred at a non-finite or absurd place
+  // gets nothing: the index would not fit an int).
+  const double oz_cells =
+      std::round((static_cast<double>(centre.z()) - 0.5 * nz_ * resolution_z_ - g.z0) /
+                 static_cast<double>(resolution_z_));
+  if (!(std::abs(oz_cells) < 1e9) || !std::isfinite(ox) || !std::isfinite(oy)) {
+    updateSqrt();
+    return;
+  }
+  const int oz = static_cast<int>(oz_cells);
   const float inv_res = 1.f / resolution_;
   // Cell weights of both axes; room for the grid plus the four-wide loop's overrun.
   thread_local std::vector<float> buf;
@@ -408,20 +459,58 @@ void SurfaceDensity::computeFromPrepared(const PreparedGaussians& g,
     if (kz1 <= kz0) continue;
     const Eigen::Vector3f& p = points[static_cast<std::size_t>(g.index[k])];
     int fy = 0, fx = 0;
+    float total_y = 1.f, total_x = 1.f;
     const int cy =
-        preparedAxisWeights((p.y() - oy) * inv_res, g.a_xy[k], g.reach_xy[k], ny_, fy, wy);
+        preparedAxisWeights((p.y() - oy) * inv_res, g.a_xy[k], g.reach_xy[k], ny_, fy, wy, total_y);
     if (cy == 0) continue;
     const int cx =
-        preparedAxisWeights((p.x() - ox) * inv_res, g.a_xy[k], g.reach_xy[k], nx_, fx, wx);
+        preparedAxisWeights((p.x() - ox) * inv_res, g.a_xy[k], g.reach_xy[k], nx_, fx, wx, total_x);
     if (cx == 0) continue;
+    const float scale = 1.f / (total_x * total_y);
+#ifdef __SSE2__
+    // Rows of four cells: the x weights come padded with zeros to a multiple of four, so the
+    // cells past the Gaussian's window (further along the row, or the next row's first cells)
+    // get + 0 and keep their values bit for bit. This replaces a short vector loop with a scalar
+    // tail, whose branches cost more than the arithmetic for windows of 3-6 cells. A Gaussian whose
+    // padding would run past the end of the grid takes the scalar loop.
+    const int cx4 = (cx + 3) & ~3;
+    const std::size_t last_row = index(fx, fy + cy - 1, z_first + kz1 - 1);
+    if (last_row + static_cast<std::size_t>(cx4) <= data_.size()) {
+      const __m128 w0 = _mm_loadu_ps(wx), w1 = _mm_loadu_ps(wx + 4);
+      for (int kz = kz0; kz < kz1; ++kz) {
+        const float fz = g.wz[static_cast<std::size_t>(b + kz)] * scale;
+        float* row = &data_[index(fx, fy, z_first + kz)];
+        for (int ky = 0; ky < cy; ++ky, row += nx_) {
+          const __m128 f = _mm_set1_ps(fz * wy[ky]);
+          _mm_storeu_ps(row, _mm_add_ps(_mm_loadu_ps(row), _mm_mul_ps(f, w0)));
+          if (cx4 > 4) {
+            _mm_storeu_ps(row + 4, _mm_add_ps(_mm_loadu_ps(row + 4), _mm_mul_ps(f, w1)));
+            for (int kx = 8; kx < cx4; kx += 4)
+              _mm_storeu_ps(row + kx, _mm_add_ps(_mm_loadu_ps(row + kx),
+                                                 _mm_mul_ps(f, _mm_loadu_ps(wx + kx))));
+          }
+        }
+      }
+    } else {
+      for (int kz = kz0; kz < kz1; ++kz) {
+        const float fz = g.wz[static_cast<std::size_t>(b + kz)] * scale;
+        for (int ky = 0; ky < cy; ++ky) {
+          const float fzy = fz * wy[ky];
+          float* row = &data_[index(fx, fy + ky, z_first + kz)];
+          for (int kx = 0; kx < cx; ++kx) row[kx] += fzy * wx[kx];
+        }
+      }
+    }
+#else
     for (int kz = kz0; kz < kz1; ++kz) {
-      const float fz = g.wz[static_cast<std::size_t>(b + kz)];
+      const float fz = g.wz[static_cast<std::size_t>(b + kz)] * scale;
       for (int ky = 0; ky < cy; ++ky) {
         const float fzy = fz * wy[ky];
         float* __restrict row = &data_[index(fx, fy + ky, z_first + kz)];
         for (int kx = 0; kx < cx; ++kx) row[kx] += fzy * wx[kx];
       }
     }
+#endif
   }
   updateSqrt();
 }

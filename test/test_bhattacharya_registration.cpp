@@ -272,6 +272,8 @@ TEST(BhattacharyaRegistration, TargetDensityAndSourceDensityForAccumulation) {
   model->compute(*first, sensor, c.head<3>());
 
   BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ> reg;
+  EXPECT_FALSE(reg.getComputeSourceDensity());  // off by default: a drop-in needs no view
+  reg.setComputeSourceDensity(true);
   reg.setTargetDensity(model);  // no target cloud at all
   reg.setInputSource(second);
   pcl::PointCloud<pcl::PointXYZ> out;
@@ -289,7 +291,8 @@ TEST(BhattacharyaRegistration, TargetDensityAndSourceDensityForAccumulation) {
   EXPECT_GT(pcl_movers::SurfaceDensity::bhattacharyya(*model, *view), reg.getSimilarity());
 }
 
-// Without the source density (setComputeSourceDensity(false), as MoverTracker registers) the
+// Without the source density (setComputeSourceDensity(false), the default, as MoverTracker
+// registers) the
 // motion and B are the same, and the view rebuilt from the final transformation (σ from the
 // ranges before the motion) is the density align() would have returned.
 TEST(BhattacharyaRegistration, SourceDensityCanBeLeftToTheCaller) {
@@ -301,6 +304,7 @@ TEST(BhattacharyaRegistration, SourceDensityCanBeLeftToTheCaller) {
   pcl::compute3DCentroid(*first, c);
   model->compute(*first, sensor, c.head<3>());
   BhattacharyaRegistration<pcl::PointXYZ, pcl::PointXYZ> reg;
+  reg.setComputeSourceDensity(true);
   reg.setTargetDensity(model);
   reg.setSensorOrigin(sensor);
   reg.setInputSource(second);
@@ -602,6 +606,7 @@ TEST(BhattacharyaRegistration, DegenerateInputsWithEitherPathAndMixedTypes) {
   for (const auto method : {Reg::CorrelationMethod::Direct, Reg::CorrelationMethod::FFT}) {
     Reg reg;
     reg.setCorrelationMethod(method);
+    reg.setComputeSourceDensity(true);  // a failure must not leave a stale view behind
     pcl::PointCloud<pcl::PointXYZI> out;
     reg.setInputTarget(good);
     reg.setInputSource(good_i);  // XYZI source, XYZ target, 0.3 m apart

@@ -258,7 +258,8 @@ const SurfaceDensity* BhattacharyaRegistration<PointSource, PointTarget, Scalar>
     target.clear();
     return nullptr;
   }
-  target.setGridSize(nx_, ny_, nz_);
+  if (target.getNx() != nx_ || target.getNy() != ny_ || target.getNz() != nz_)
+    target.setGridSize(nx_, ny_, nz_);
   target.setResolution(resolution_);
   target.setResolutionZ(grid_height_ / static_cast<float>(nz_));
   target.setSigmaPerMetre(sigma_per_metre_);
@@ -681,16 +682,20 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::search(
   surface_.ny = wx;
   surface_.resolution = res;
   surface_.yaws.resize(static_cast<std::size_t>(layers));
-  surface_.values.assign(static_cast<std::size_t>(layers) * wx * wx, 0.f);
+  surface_.values.resize(static_cast<std::size_t>(layers) * wx * wx);
+  // A flat loop per layer (the z planes of a layer are consecutive in `scores`): at 5 layers of
+  // 33 × 33 it is a few microseconds, where the indexed one was 5 % of a registration.
+  const std::size_t plane = static_cast<std::size_t>(wx) * wx;
   for (int l = 0; l < layers; ++l) {
     surface_.yaws[static_cast<std::size_t>(l)] = static_cast<float>(l - mid) * yaw_step_;
-    for (int dy = -nr; dy <= nr; ++dy)
-      for (int dx = -nr; dx <= nr; ++dx) {
-        float m = 0.f;
-        for (int dz = -nrz; dz <= nrz; ++dz) m = std::max(m, at(l, dz, dy, dx));
-        surface_.values[(static_cast<std::size_t>(l) * wx + (dy + nr)) * wx + (dx + nr)] =
-            std::min(std::max(m, 0.f), 1.f);
-      }
+    float* out = surface_.values.data() + static_cast<std::size_t>(l) * plane;
+    const float* in = scores.data() + static_cast<std::size_t>(l) * wz * plane;
+    for (std::size_t i = 0; i < plane; ++i) out[i] = std::min(std::max(in[i], 0.f), 1.f);
+    for (int z = 1; z < wz; ++z) {
+      const float* layer_z = in + static_cast<std::size_t>(z) * plane;
+      for (std::size_t i = 0; i < plane; ++i)
+        out[i] = std::max(out[i], std::min(std::max(layer_z[i], 0.f), 1.f));
+    }
   }
 
   const bool on_edge = bdx == -nr || bdx == nr || bdy == -nr || bdy == nr ||
@@ -746,7 +751,7 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::search(
         w.local[((static_cast<std::size_t>((rl - 1) / 2) * (2 * rz + 1) + rz) * 3 + 1) * 3 + 1];
     value = std::min(std::max(v, centre_sample), 1.f);
     if (std::max(std::max(std::abs(u[0]), std::abs(u[1])),
-                 std::max(std::abs(u[2]), std::abs(u[3]))) < 0.02f)
+                 std::max(std::abs(u[2]), std::abs(u[3]))) < kRecentreTolerance)
       break;
   }
 
