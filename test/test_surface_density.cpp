@@ -339,6 +339,10 @@ TEST(SurfaceDensity, CellWeightsMatchErfReferenceInsideClippedAndWideWindows) {
       {29, 29, 7, 0.2f, 0.4f, 0.13f, 0.21f, Eigen::Vector3f(-2.85f, 2.83f, -1.35f)},   // clipped
       {29, 29, 7, 0.2f, 0.4f, 0.3f, 0.5f, Eigen::Vector3f(2.87f, -2.93f, 1.37f)},      // clipped
       {300, 3, 1, 0.1f, 0.4f, 2.5f, 0.3f, Eigen::Vector3f(0.31f, 0.f, 0.f)},           // wide
+      // Windows of 7 and 8 cells: the last one the rasteriser keeps in registers and the first
+      // one it builds in memory.
+      {29, 29, 7, 0.2f, 0.4f, 0.2f, 0.21f, Eigen::Vector3f(0.013f, 0.029f, 0.11f)},
+      {29, 29, 7, 0.2f, 0.4f, 0.23f, 0.21f, Eigen::Vector3f(0.071f, -0.047f, 0.11f)},
   };
   for (const Case& c : cases) {
     SurfaceDensity d(c.nx, c.ny, c.nz, c.res, c.res_z);
