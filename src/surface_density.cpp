@@ -300,6 +300,14 @@ preparedAxisWeights(float u, float a, float reach, int n, int& first, float* e, 
   const int cells = last - first + 1;
   const int count = cells + 1;       // boundaries
   float e_first = 0.f, e_end = 0.f;  // erf at the first and the last boundary
+  // Longer windows: the boundaries in e, then differences in place.
+  auto inMemory = [&](int k) {  // boundaries before k are written already
+    for (; k < count; ++k) e[k] = fastErf((static_cast<float>(first + k) - u) * a);
+    e_first = e[0];
+    e_end = e[cells];
+    for (k = 0; k < cells; ++k) e[k] = e[k + 1] - e[k];
+    for (k = cells; k < ((cells + 3) & ~3); ++k) e[k] = 0.f;
+  };
 #ifdef __SSE2__
   const __m128 va = _mm_set1_ps(a), vu = _mm_set1_ps(u);
   auto boundaries = [&](int k) {
@@ -327,21 +335,12 @@ preparedAxisWeights(float u, float a, float reach, int n, int& first, float* e, 
     e_first = b[0];
     e_end = b[cells];
   } else {
-    for (int k = 0; k < count; k += 4) _mm_storeu_ps(e + k, boundaries(k));
-    e_first = e[0];
-    e_end = e[cells];
     int k = 0;
-    for (; k + 4 <= cells; k += 4)
-      _mm_storeu_ps(e + k, _mm_sub_ps(_mm_loadu_ps(e + k + 1), _mm_loadu_ps(e + k)));
-    for (; k < cells; ++k) e[k] = e[k + 1] - e[k];
-    for (k = cells; k < ((cells + 3) & ~3); ++k) e[k] = 0.f;
+    for (; k + 4 <= count; k += 4) _mm_storeu_ps(e + k, boundaries(k));
+    inMemory(k);
   }
 #else
-  for (int k = 0; k < count; ++k) e[k] = fastErf((static_cast<float>(first + k) - u) * a);
-  e_first = e[0];
-  e_end = e[cells];
-  for (int k = 0; k < cells; ++k) e[k] = e[k + 1] - e[k];
-  for (int k = cells; k < ((cells + 3) & ~3); ++k) e[k] = 0.f;
+  inMemory(0);
 #endif
   // Mass of the whole (unclipped) window, to normalise: the weights telescope to its two ends.
   const float e_lo = lo == static_cast<float>(first) ? e_first : fastErf((lo - u) * a);
@@ -471,8 +470,8 @@ void SurfaceDensity::computeFromPrepared(const PreparedGaussians& g,
     // Rows of four cells: the x weights come padded with zeros to a multiple of four, so the
     // cells past the Gaussian's window (further along the row, or the next row's first cells)
     // get + 0 and keep their values bit for bit. This replaces a short vector loop with a scalar
-    // tail, whose branches cost more than the arithmetic for windows of 3-6 cells. A Gaussian whose
-    // padding would run past the end of the grid takes the scalar loop.
+    // tail, whose branches cost more than the arithmetic for windows of 3-6 cells. A Gaussian
+    // whose padding would run past the end of the grid takes the scalar loop below.
     const int cx4 = (cx + 3) & ~3;
     const std::size_t last_row = index(fx, fy + cy - 1, z_first + kz1 - 1);
     if (last_row + static_cast<std::size_t>(cx4) <= data_.size()) {
@@ -491,17 +490,9 @@ void SurfaceDensity::computeFromPrepared(const PreparedGaussians& g,
           }
         }
       }
-    } else {
-      for (int kz = kz0; kz < kz1; ++kz) {
-        const float fz = g.wz[static_cast<std::size_t>(b + kz)] * scale;
-        for (int ky = 0; ky < cy; ++ky) {
-          const float fzy = fz * wy[ky];
-          float* row = &data_[index(fx, fy + ky, z_first + kz)];
-          for (int kx = 0; kx < cx; ++kx) row[kx] += fzy * wx[kx];
-        }
-      }
+      continue;
     }
-#else
+#endif
     for (int kz = kz0; kz < kz1; ++kz) {
       const float fz = g.wz[static_cast<std::size_t>(b + kz)] * scale;
       for (int ky = 0; ky < cy; ++ky) {
@@ -510,7 +501,6 @@ void SurfaceDensity::computeFromPrepared(const PreparedGaussians& g,
         for (int kx = 0; kx < cx; ++kx) row[kx] += fzy * wx[kx];
       }
     }
-#endif
   }
   updateSqrt();
 }

@@ -292,9 +292,8 @@ TEST(BhattacharyaRegistration, TargetDensityAndSourceDensityForAccumulation) {
 }
 
 // Without the source density (setComputeSourceDensity(false), the default, as MoverTracker
-// registers) the
-// motion and B are the same, and the view rebuilt from the final transformation (σ from the
-// ranges before the motion) is the density align() would have returned.
+// registers) the motion and B are the same, and the view rebuilt from the final transformation
+// (σ from the ranges before the motion) is the density align() would have returned.
 TEST(BhattacharyaRegistration, SourceDensityCanBeLeftToTheCaller) {
   const Eigen::Vector3f sensor(0.f, 0.f, 1.73f);
   auto first = vehicle(18.f, 2.f, 0.1f, sensor, 0.f, 1);
