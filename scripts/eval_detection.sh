@@ -19,9 +19,11 @@ SCENES="$BUILD_DIR/eval-scenes"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 
-# Simulated scenes: generated once into the build folder (deterministic for a given scenario).
+# Simulated scenes: generated into the build folder (deterministic for a given scenario).
 for scene in open urban wooded; do
-  if [ ! -f "$SCENES/$scene/objects.txt" ]; then
+  # Regenerated when the simulator or the scenario is newer than the cached scene.
+  if [ ! -f "$SCENES/$scene/objects.txt" ] || [ "$SIM" -nt "$SCENES/$scene/objects.txt" ] ||
+    [ "$SRC_DIR/data/scenarios/$scene.yaml" -nt "$SCENES/$scene/objects.txt" ]; then
     mkdir -p "$SCENES"
     "$SIM" "$SRC_DIR/data/scenarios/$scene.yaml" "$SCENES/$scene" --overwrite >/dev/null \
       2>"$work/sim.err" || { echo "error: pcl_movers_simulate failed on $scene:" >&2; cat "$work/sim.err" >&2; exit 1; }

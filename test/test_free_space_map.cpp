@@ -5,10 +5,12 @@
 #include <pcl_movers/free_space_map.h>
 #include <pcl_movers/mover_tracker.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
 #include <random>
+#include <string>
 #include <vector>
 
 namespace {
@@ -162,7 +164,7 @@ std::vector<bool> runTracker(pcl_movers::DetectorParameters params, bool use_map
   Tracker tracker;
   tracker.setParameters(params);
   pcl_movers::FreeSpaceMap map;
-  map.setHistory(params.free_space_lag + 1);
+  map.setHistory(std::max(params.free_space_lag, params.free_space_long_lag) + 1);
   if (use_map) tracker.setFreeSpaceMap(&map);
   std::vector<bool> mover;
   for (int f = 0; f < frames; ++f) {
@@ -230,6 +232,32 @@ TEST(FreeSpaceMap, TrackerConfirmsMoverThroughFreeSpace) {
     EXPECT_LE(first, 10) << mode;
     // Latched once confirmed.
     EXPECT_EQ(count(mover), static_cast<int>(mover.size()) - first) << mode;
+  }
+}
+
+TEST(FreeSpaceMap, FarWalkerApproachingIsConfirmedThroughTheLongLag) {
+  // A walker coming straight at the (parked) ego from 50 m at 1.4 m/s, a wall behind it: in
+  // free_space_lag = 5 frames it moves 0.7 m, under the 1.3 m margin at that range, so only the
+  // free_space_long_lag test (15 frames, 2.1 m) can see its space empty. Standing still, it is
+  // never a mover.
+  for (const double speed : {1.4, 0.0}) {
+    auto scene = [speed](int f, Eigen::Vector2d& ego) {
+      ego = Eigen::Vector2d(0, 0);
+      return std::vector<Box>{{{50 - speed * 0.1 * f, 0}, 0.5, 0.5, 1.8},
+                              {{70, 0}, 1.0, 30.0, 4.0}};
+    };
+    auto all = [](int, const Eigen::Vector3f&) { return true; };
+    for (const int long_lag : {15, 0}) {
+      pcl_movers::DetectorParameters params;
+      params.free_space_long_lag = long_lag;
+      const auto mover = runTracker(params, true, 50, scene, all);
+      SCOPED_TRACE("speed " + std::to_string(speed) + ", long lag " + std::to_string(long_lag));
+      if (speed > 0 && long_lag > 0) {
+        EXPECT_GE(count(mover), 20);  // confirmed by frame 30, and latched
+      } else {
+        EXPECT_EQ(count(mover), 0);
+      }
+    }
   }
 }
 

@@ -843,3 +843,109 @@ double emergingVelocityError(int reacquire) {
 TEST(MoverTracker, MoverEmergingFromOcclusionInheritsItsVelocity) {
   EXPECT_LT(emergingVelocityError(1), 2.0);
 }
+
+namespace {
+
+/** One frame of two walkers on parallel lines 0.8 m apart (A from x = -6 at va, B from x = b0 at
+ * vb), merged into one cluster (as region growing joins touching objects) while they are within
+ * 1 m of each other along x; the clusters go through splitMergedClusters() as in MoverDetector.
+ * Returns the track ids of the output clusters nearest each walker (-1: none), and whether the
+ * frame's cluster was merged and split. */
+struct WalkerFrame {
+  int id_a = -1, id_b = -1;
+  bool merged = false, split = false;
+};
+WalkerFrame walkersFrame(Tracker& tracker, double t, double va, double b0, double vb) {
+  const Eigen::Vector3d sensor(0, -15, 1.7);
+  const Eigen::Vector2d a(-6 + va * t, 0.0), b(b0 + vb * t, 0.8);
+  SceneBuilder scene;
+  scene.addBox(sensor, a, 0.0, 0.6, 0.5, 1.8);
+  scene.addBox(sensor, b, 0.0, 0.6, 0.5, 1.8);
+  WalkerFrame out;
+  std::vector<pcl::PointIndices> clusters = scene.clusters;
+  if (std::abs(a.x() - b.x()) < 1.0) {
+    clusters[0].indices.insert(clusters[0].indices.end(), clusters[1].indices.begin(),
+                               clusters[1].indices.end());
+    clusters.pop_back();
+    out.merged = true;
+  }
+  std::vector<std::uint8_t> occluded(clusters.size(), 0);
+  const auto parts = tracker.splitMergedClusters(*scene.cloud, clusters, t);
+  if (!parts.empty()) {
+    std::vector<pcl::PointIndices> split(parts.size());
+    occluded.assign(parts.size(), 0);
+    for (std::size_t k = 0; k < parts.size(); ++k) {
+      const auto& src = clusters[static_cast<std::size_t>(parts[k].cluster)].indices;
+      for (const int j : parts[k].positions) split[k].indices.push_back(src[j]);
+      occluded[k] = parts[k].positions.size() == src.size() ? 0 : 2;
+    }
+    out.split = split.size() > clusters.size();
+    clusters = split;
+  }
+  tracker.update(scene.cloud, clusters, sensor, t, occluded);
+  double best_a = 0.5, best_b = 0.5;
+  for (const auto& r : tracker.getClusterResults()) {
+    if (r.track_id < 0) continue;
+    const double da = (r.features.centroid.head<2>() - a).norm();
+    const double db = (r.features.centroid.head<2>() - b).norm();
+    if (da < best_a) best_a = da, out.id_a = r.track_id;
+    if (db < best_b) best_b = db, out.id_b = r.track_id;
+  }
+  return out;
+}
+
+}  // namespace
+
+// Two walkers passing each other in opposite directions are merged into one cluster for a few
+// frames: the cluster is split between their tracks, so both keep their identities and are
+// reported every frame. Without the split, one of them goes unreported while merged.
+TEST(MoverTracker, MergedClusterOfPassingWalkersIsSplit) {
+  for (const int enabled : {1, 0}) {
+    auto params = defaults();
+    params.split_merged = enabled;
+    Tracker tracker;
+    tracker.setParameters(params);
+    std::set<int> ids_a, ids_b;
+    int merged = 0, split = 0, both_reported = 0;
+    for (int k = 0; k < 80; ++k) {
+      const WalkerFrame f = walkersFrame(tracker, 0.1 * k, 1.5, 6.0, -1.5);
+      if (k >= 10 && !f.merged) {  // established tracks, seen apart
+        ids_a.insert(f.id_a);
+        ids_b.insert(f.id_b);
+      }
+      if (f.merged) {
+        ++merged;
+        split += f.split;
+        both_reported += f.id_a >= 0 && f.id_b >= 0 && f.id_a != f.id_b;
+      }
+    }
+    SCOPED_TRACE(enabled ? "split on" : "split off");
+    ASSERT_GE(merged, 4);
+    if (enabled) {
+      EXPECT_EQ(split, merged);
+      EXPECT_EQ(both_reported, merged);
+      EXPECT_EQ(ids_a.size(), 1u);
+      EXPECT_EQ(ids_b.size(), 1u);
+      EXPECT_NE(*ids_a.begin(), *ids_b.begin());
+    } else {
+      EXPECT_EQ(split, 0);
+      EXPECT_EQ(both_reported, 0);
+    }
+  }
+}
+
+// Two walkers catching up with each other at similar velocities (2.0 and 1.4 m/s) are not
+// split when their clusters merge: 0.6 m/s is within the uncertainty of their position lines
+// and under split_min_speed_difference, as for fragments of one object.
+TEST(MoverTracker, MergedClusterOfObjectsMovingAlikeIsNotSplit) {
+  Tracker tracker;
+  tracker.setParameters(defaults());
+  int merged = 0, splits = 0;
+  for (int k = 0; k < 100; ++k) {
+    const WalkerFrame f = walkersFrame(tracker, 0.1 * k, 2.0, -2.0, 1.4);
+    merged += f.merged;
+    splits += f.split;
+  }
+  ASSERT_GE(merged, 10);
+  EXPECT_EQ(splits, 0);
+}

@@ -183,6 +183,24 @@ TEST(LidarSimulator, OccludedObjectGetsNoHits) {
   EXPECT_GT(findObject(open, 1)->n_points, 100);
 }
 
+TEST(LidarSimulator, ObjectAcrossTheRangeLimitKeepsItsRowWhileItHasPoints) {
+  // A 4.4 m car pointing at the sensor with its centre 1 m beyond max_range: its near end is in
+  // range and returns points, so it must have a ground-truth box (a detection of those points
+  // would otherwise count as a false alarm). A car wholly beyond the range has no row.
+  Scenario sc = emptyScene();
+  sc.sensor.max_range = 40.0;
+  sc.objects.push_back(staticObject("car", 41.0, 0.0));   // id 1, centre out, near end in
+  sc.objects.push_back(staticObject("car", 0.0, 50.0));   // id 2, wholly out of range
+  sc.objects.push_back(staticObject("car", 20.0, 10.0));  // id 3, in range
+  const Frame fr = simulate(LidarSimulator(sc), 0);
+  const auto* cut = findObject(fr, 1);
+  ASSERT_NE(cut, nullptr);
+  EXPECT_GT(cut->n_points, 0);
+  EXPECT_GT(cut->center.norm(), sc.sensor.max_range);
+  EXPECT_EQ(findObject(fr, 2), nullptr);
+  ASSERT_NE(findObject(fr, 3), nullptr);
+}
+
 TEST(LidarSimulator, FoliageIsPorous) {
   Scenario sc = emptyScene();
   ObjectSpec bush = staticObject("brush", 10.0, 0.0);

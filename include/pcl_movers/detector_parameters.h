@@ -50,10 +50,12 @@ struct DetectorParameters {
   /// SemanticKITTI objects (92.9 -> 96.5 %) but lowered the mean hit rate on simulated urban by
   /// 1.6 points (a cyclist joined to its surroundings), and KITTI 0000 did not change.
   double row_bridge = 0.0;
-  /// Clusters with fewer points are ignored (noise, too small to track). 10, the lower bound of a
-  /// scored target and of the registration benchmark's views (docs/design.md): at 12 a pedestrian
-  /// at 35-40 m (10-11 points) was visible for up to 20 frames before a track was born (open).
-  int min_cluster_points = 10;
+  /// Clusters with fewer points are ignored (noise, too small to track). 8, two under the 10 box
+  /// points of a scored target (docs/design.md): the ground filter takes a far walker's feet, so a
+  /// 10-12-point pedestrian at 45-60 m left 8-10-point clusters, and at 10 its track was born or
+  /// lost every other frame (open pedestrian 5 confirmed 18 frames after it became visible, 7 at
+  /// 8).
+  int min_cluster_points = 8;
   /// Clusters further than this from the sensor are ignored [m] (too sparse to register).
   double max_range = 80.0;
 
@@ -167,6 +169,16 @@ struct DetectorParameters {
   /// saw through, or have left space the current scan sees through (0 = test off). 5 frames at
   /// 10 Hz: a target at mover_speed has moved 0.6 m, twice the near margin.
   int free_space_lag = 5;
+  /// A second, longer lag tried when the free_space_lag test fails (0 = off): a slow mover
+  /// approaching far away (a pedestrian walking towards the sensor at 50 m) moves less in
+  /// free_space_lag frames than the range-scaled margin (1.3 m at 50 m), so only an older scan
+  /// can have seen its space empty. Static objects give no evidence at any lag.
+  int free_space_long_lag = 15;
+  /// Fraction of the points the free_space_long_lag test needs: a mover has moved three times
+  /// further by then and is mostly seen through (urban walker at 50 m: 70-100 %), while the
+  /// spurious evidence of a static object (foliage gaps, a changed viewpoint) does not grow with
+  /// the lag (a KITTI bush: 32 %).
+  double free_space_long_min_fraction = 0.5;
   /// Fraction of the tested points that must be seen through, and at least this many points.
   double free_space_min_fraction = 0.2;
   int free_space_min_points = 3;
@@ -193,7 +205,7 @@ struct DetectorParameters {
   /// many points are confirmed early (sparse or poorly matched views keep the M-of-N rule: their
   /// registrations can jump between partial views consistently enough to look like a line; with
   /// no B bound a simulated wooded shrub was confirmed). 0.8 is a confident match, as
-  /// registration_stop_similarity; 12 points keeps the 10-11-point clusters min_cluster_points
+  /// registration_stop_similarity; 12 points keeps the 8-11-point clusters min_cluster_points
   /// admits on the vote rule.
   double confirm_min_similarity = 0.8;
   int confirm_min_points = 12;
@@ -217,6 +229,17 @@ struct DetectorParameters {
   /// track's velocity is known (from mover_min_age unoccluded views, or inherited on
   /// re-acquisition); later ones are taken with the range-scaled σ. 0 = never skip.
   int occluded_skip = 10;
+  /// Merged clusters (0 = off; registration mode): a cluster claimed by two or more established
+  /// tracks (each with at least 4 of its points within split_claim_distance of the track's last
+  /// view moved by its prediction), one a confirmed mover and the others confirmed or static,
+  /// whose position lines differ by at least split_min_speed_difference and gate_sigmas times
+  /// their σ is split between them (MoverTracker::splitMergedClusters()): two urban walkers
+  /// passing each other were one cluster for 7 frames, one track carried the merged view with a
+  /// velocity 0.5 m/s off and the other track died. Fragments of one object move alike and stay
+  /// merged. Split parts count as occluded (their shared side is not the object's extent).
+  int split_merged = 1;
+  double split_claim_distance = 0.4;
+  double split_min_speed_difference = 1.0;
   /// Re-acquisition after occlusion (0 = off; registration mode): a track born on a cluster near
   /// the predicted extent of a mover lost in the last frames (coasting) starts with that mover's
   /// velocity (σ `reacquire_velocity_sigma` [m/s]) instead of zero, and skips the line-fit restart
@@ -313,6 +336,10 @@ void DetectorParameters::forEachParameter(F&& f) {
   f("displacement_ratio", displacement_ratio, "min net displacement / (mover_speed * time)");
   f("free_space_lag", free_space_lag,
     "free-space test against the scan this many frames ago (0 = off)");
+  f("free_space_long_lag", free_space_long_lag,
+    "longer lag tried when the free_space_lag test fails [frames] (0 = off)");
+  f("free_space_long_min_fraction", free_space_long_min_fraction,
+    "min fraction seen through at free_space_long_lag");
   f("free_space_min_fraction", free_space_min_fraction, "min fraction of points seen through");
   f("free_space_min_points", free_space_min_points, "min number of points seen through");
   f("free_space_votes", free_space_votes, "passed free-space tests needed to confirm");
@@ -332,6 +359,11 @@ void DetectorParameters::forEachParameter(F&& f) {
     "(0 = off)");
   f("occluded_skip", occluded_skip,
     "occluded registered updates in a row the reported velocity coasts through");
+  f("split_merged", split_merged, "1 = split clusters claimed by tracks that move differently");
+  f("split_claim_distance", split_claim_distance,
+    "max distance of a claimed point from the track's predicted view [m]");
+  f("split_min_speed_difference", split_min_speed_difference,
+    "min velocity difference of tracks whose shared cluster is split [m/s]");
   f("reacquire_velocity", reacquire_velocity,
     "1 = a track born where a coasting mover is predicted starts with its velocity");
   f("reacquire_velocity_sigma", reacquire_velocity_sigma,
@@ -446,6 +478,9 @@ inline void DetectorParameters::validate() const {
   positive("max_gate_radius", max_gate_radius);
   positive("max_tracks", max_tracks);
   positive("mover_window", mover_window);
+  positive("split_claim_distance", split_claim_distance);
+  if (!(split_min_speed_difference >= 0))
+    throw InputError("parameter split_min_speed_difference must be >= 0");
   positive("static_refresh_frames", static_refresh_frames);
   if (!(static_clearance >= 0)) throw InputError("parameter static_clearance must be >= 0");
   positive("mover_votes", mover_votes);
@@ -455,6 +490,10 @@ inline void DetectorParameters::validate() const {
     throw InputError("parameter min_similarity must be in [0, 1]");
   if (free_space_lag < 0 || free_space_lag > 50)
     throw InputError("parameter free_space_lag must be in [0, 50]");
+  if (free_space_long_lag < 0 || free_space_long_lag > 50)
+    throw InputError("parameter free_space_long_lag must be in [0, 50]");
+  if (free_space_long_min_fraction < 0 || free_space_long_min_fraction > 1)
+    throw InputError("parameter free_space_long_min_fraction must be in [0, 1]");
   if (free_space_min_fraction < 0 || free_space_min_fraction > 1)
     throw InputError("parameter free_space_min_fraction must be in [0, 1]");
   if (free_space_votes < 1) throw InputError("parameter free_space_votes must be >= 1");

@@ -154,6 +154,19 @@ class MoverTracker {
     std::deque<char> free_votes;  ///< free-space test passed, for each of the last tests
     /// World points of the last updates (subsampled), oldest first, for the free-space test.
     std::deque<std::vector<Eigen::Vector3f>> past_points;
+    /// World points of the last update's view (at most kLastViewPoints), for
+    /// splitMergedClusters().
+    std::vector<Eigen::Vector3f> last_view;
+  };
+  static constexpr std::size_t kLastViewPoints = 64;
+  /// Smallest part splitMergedClusters() cuts off, and tracks (see update()).
+  static constexpr int kMinSplitPoints = 4;
+
+  /** \brief A cluster of the frame after splitMergedClusters(): the input cluster it comes from
+   * and the positions, in that cluster's index list, of its points. */
+  struct ClusterPart {
+    int cluster = -1;
+    std::vector<int> positions;
   };
 
   /** \brief What happened to one input cluster in the last update(). */
@@ -184,10 +197,27 @@ class MoverTracker {
    * read) \param clusters point indices of each object cluster \param sensor_origin sensor position
    * in the world frame (ranges → density σ) \param time frame time [s], increasing
    * \param occluded per cluster, whether a side of it is bounded by a nearer object
-   * (RangeImageRegionGrowing::occludedSides(), non-zero = occluded); empty = unknown (none) */
+   * (RangeImageRegionGrowing::occludedSides(), non-zero = occluded; 2 = a part of a merged cluster
+   * split by splitMergedClusters(), also tracked below min_cluster_points, down to
+   * kMinSplitPoints); empty = unknown (none) */
   void update(const PointCloudConstPtr& cloud, const std::vector<pcl::PointIndices>& clusters,
               const Eigen::Vector3d& sensor_origin, double time,
               const std::vector<std::uint8_t>& occluded = {});
+
+  /** \brief Splits the clusters that hold the predicted objects of two or more established tracks
+   * moving differently (two walkers passing each other, a cyclist beside a parked car): region
+   * growing joins objects that touch, and a merged cluster would update one track with both
+   * objects' points while the other coasts and dies. Call before update() with the same frame
+   * time. A track (established, seen in the last 3 frames) claims a cluster when at least
+   * kMinSplitPoints of its points lie within split_claim_distance of the track's last view moved
+   * by its predicted motion; a cluster claimed by a confirmed mover and another confirmed or
+   * static track whose position lines differ by split_min_speed_difference and gate_sigmas
+   * times their σ is split, each point going to the claimer whose moved view is nearest.
+   * \return empty when nothing was split (the clusters stand as they are), else one part per
+   * output cluster, in order: unsplit clusters whole, split ones as several parts. */
+  std::vector<ClusterPart> splitMergedClusters(const PointCloud& cloud,
+                                               const std::vector<pcl::PointIndices>& clusters,
+                                               double time) const;
 
   /** \brief Scans for the free-space test (see DetectorParameters::free_space_lag); the map must
    * already hold the current frame's scan when update() is called. nullptr (default) disables the

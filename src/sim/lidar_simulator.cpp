@@ -937,7 +937,10 @@ void LidarSimulator::simulate(int frame, pcl::PointCloud<pcl::PointXYZI>& cloud,
     const Eigen::Vector3d center_w =
         fo.position + Eigen::Vector3d(c * bc.x() - s * bc.y(), s * bc.x() + c * bc.y(), bc.z());
     const Eigen::Vector3d center_s = T_sw * center_w;
-    if (center_s.norm() > max_range) continue;
+    // An object whose centre is out of range can still have points in the scan (the near end of a
+    // car leaving the range): it keeps its row while it has any, or a correct detection of those
+    // points would match no box and count as a false alarm.
+    if (center_s.norm() > max_range && fo.n_points == 0) continue;
     io::GroundTruthObject g;
     g.frame = frame;
     g.track_id = obj.track_id;

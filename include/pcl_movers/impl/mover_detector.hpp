@@ -179,7 +179,7 @@ void MoverDetector<PointT>::process(const PointCloudConstPtr& scan, const Eigen:
 
   // Segmentation of the non-ground points on the range image.
   const auto t2 = Clock::now();
-  const std::vector<pcl::PointIndices> clusters = segmentObjects(organized, objects);
+  std::vector<pcl::PointIndices> clusters = segmentObjects(organized, objects);
   result.clusters = static_cast<int>(clusters.size());
 
   // World frame: only the cluster points are transformed (the rest is never used again).
@@ -192,7 +192,7 @@ void MoverDetector<PointT>::process(const PointCloudConstPtr& scan, const Eigen:
   const auto t4 = Clock::now();
   // (Re)bound every frame: a copied detector must not point into the original's map.
   if (p.free_space_lag > 0) {
-    free_space_.setHistory(p.free_space_lag + 1);
+    free_space_.setHistory(std::max(p.free_space_lag, p.free_space_long_lag) + 1);
     free_space_.setMargin(p.free_space_margin, p.free_space_margin_per_metre);
     free_space_.addScan(*organized, pose);
     tracker_.setFreeSpaceMap(&free_space_);
@@ -207,6 +207,29 @@ void MoverDetector<PointT>::process(const PointCloudConstPtr& scan, const Eigen:
         occluded_);
   else
     occluded_.clear();
+  // Clusters holding objects of two tracks that move differently are split between them; the
+  // sensor-frame clusters (outputs) and occlusion flags follow the same split.
+  const auto parts = tracker_.splitMergedClusters(*world, world_clusters, time);
+  if (!parts.empty()) {
+    std::vector<pcl::PointIndices> split_world(parts.size()), split_sensor(parts.size());
+    std::vector<std::uint8_t> split_occluded(parts.size(), 0);
+    for (std::size_t k = 0; k < parts.size(); ++k) {
+      const auto c = static_cast<std::size_t>(parts[k].cluster);
+      const bool whole = parts[k].positions.size() == clusters[c].indices.size();
+      split_world[k].indices.reserve(parts[k].positions.size());
+      split_sensor[k].indices.reserve(parts[k].positions.size());
+      for (const int j : parts[k].positions) {
+        split_world[k].indices.push_back(world_clusters[c].indices[static_cast<std::size_t>(j)]);
+        split_sensor[k].indices.push_back(clusters[c].indices[static_cast<std::size_t>(j)]);
+      }
+      // A split part's side along the cut is not the object's extent: occluded (2 = split part,
+      // see MoverTracker::update()).
+      split_occluded[k] = !whole ? 2 : (c < occluded_.size() && occluded_[c] ? 1 : 0);
+    }
+    world_clusters = std::move(split_world);
+    clusters = std::move(split_sensor);
+    occluded_ = std::move(split_occluded);
+  }
   tracker_.update(world, world_clusters, pose.translation(), time, occluded_);
   const auto t5 = Clock::now();
 

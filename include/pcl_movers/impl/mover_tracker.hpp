@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <utility>
 
 namespace pcl_movers {
@@ -397,7 +398,7 @@ bool MoverTracker<PointT>::freeSpaceEvidence(Track& track,
   track.free_space = 0;
   if (!free_space_map_ || p.free_space_lag <= 0) return true;  // test disabled
   // (a) approaching / crossing: the object now fills space an earlier scan saw empty.
-  const auto ahead = free_space_map_->test(points, p.free_space_lag);
+  auto ahead = free_space_map_->test(points, p.free_space_lag);
   // (b) receding: the object's earlier surface is now seen through by the current scan.
   FreeSpaceMap::Evidence behind;
   // The oldest stored view is used once and dropped: each vote tests a different earlier view,
@@ -410,7 +411,182 @@ bool MoverTracker<PointT>::freeSpaceEvidence(Track& track,
     return e.seen_through >= p.free_space_min_points ? e.fraction() : 0.0;
   };
   track.free_space = std::max(score(ahead), score(behind));
+  if (track.free_space < p.free_space_min_fraction && p.free_space_long_lag > p.free_space_lag) {
+    ahead = free_space_map_->test(points, p.free_space_long_lag);
+    if (score(ahead) >= p.free_space_long_min_fraction) track.free_space = score(ahead);
+  }
   return track.free_space >= p.free_space_min_fraction;
+}
+
+template <typename PointT>
+std::vector<typename MoverTracker<PointT>::ClusterPart> MoverTracker<PointT>::splitMergedClusters(
+    const PointCloud& cloud, const std::vector<pcl::PointIndices>& clusters, double time) const {
+  const auto& p = parameters_;
+  std::vector<ClusterPart> parts;
+  if (!p.split_merged || !has_time_ || p.mode == "centroid") return parts;
+  // Tracks that can claim: established, seen in the last frame, with a view.
+  struct Claimant {
+    std::size_t track;
+    Eigen::Vector2f shift, lo, hi;  // predicted motion of the view, its moved bounding box
+    LineFit fit;                    // line through the last positions (see below)
+  };
+  std::vector<Claimant> claimants;
+  for (std::size_t ti = 0; ti < tracks_.size(); ++ti) {
+    const Track& t = tracks_[ti];
+    // Coasting for a frame or two (the walker hidden behind the one it passes) still claims.
+    if (t.missed > 2 || t.large || t.hits < p.mover_min_age || t.last_view.empty()) continue;
+    Claimant c;
+    c.track = ti;
+    c.shift = (t.filter.velocity() * std::max(0.0, time - t.last_time)).template cast<float>();
+    c.lo = Eigen::Vector2f::Constant(std::numeric_limits<float>::max());
+    c.hi = -c.lo;
+    for (const auto& q : t.last_view) {
+      c.lo = c.lo.cwiseMin(q.template head<2>() + c.shift);
+      c.hi = c.hi.cwiseMax(q.template head<2>() + c.shift);
+    }
+    c.fit = fitVelocity(t.history, p.registration_sigma);
+    claimants.push_back(c);
+  }
+  if (claimants.size() < 2 ||
+      std::none_of(claimants.begin(), claimants.end(),
+                   [&](const Claimant& c) { return tracks_[c.track].confirmed; }))
+    return parts;
+  // Moving differently, beyond doubt: fragments of one object share its velocity and are left
+  // merged, and so are tracks whose velocities are too uncertain to tell. Each velocity is the
+  // line through the track's last positions with σ from their scatter, as in the mover votes
+  // (fast_from_fit): young fragment tracks of one wooded car differed by 1-4 m/s, but their
+  // sliding positions scattered as much, while two walkers passing each other had precise lines
+  // 1.9 m/s apart. And one of them must be a confirmed mover: a static object and a young track
+  // that a few registrations made look fast would otherwise keep splitting each other (KITTI).
+  const auto differ = [&](const Claimant& a, const Claimant& b) {
+    if (!a.fit.valid || !b.fit.valid) return false;
+    if (!tracks_[a.track].confirmed && !tracks_[b.track].confirmed) return false;
+    // The other one a confirmed mover too, or static: an unconfirmed moving track next to a
+    // mover is usually a fragment of it (KITTI van) whose velocity has drifted.
+    const auto settled = [&](const Claimant& c) {
+      return tracks_[c.track].confirmed || c.fit.velocity.norm() < 0.5 * p.mover_speed;
+    };
+    if (!settled(a) || !settled(b)) return false;
+    const double dv = (a.fit.velocity - b.fit.velocity).norm();
+    const double sigma = std::sqrt(a.fit.sigma_v * a.fit.sigma_v + b.fit.sigma_v * b.fit.sigma_v);
+    return dv >= p.split_min_speed_difference && dv > p.gate_sigmas * sigma;
+  };
+  const float claim = static_cast<float>(p.split_claim_distance);
+  const float claim2 = claim * claim;
+  bool any_split = false;
+  std::vector<std::size_t> near;
+  std::vector<int> owner;
+  std::vector<float> best;
+  for (std::size_t c = 0; c < clusters.size(); ++c) {
+    const auto& idx = clusters[c].indices;
+    // Cheap rejection by bounding boxes, of an even subsample of at most 64 points (this runs
+    // on every cluster of the frame; the claim margin covers what the subsample misses).
+    Eigen::Vector2f lo = Eigen::Vector2f::Constant(std::numeric_limits<float>::max()), hi = -lo;
+    const std::size_t step = std::max<std::size_t>(1, idx.size() / 64);
+    for (std::size_t j = 0; j < idx.size(); j += step) {
+      const auto& q = cloud[idx[j]];
+      if (!std::isfinite(q.x) || !std::isfinite(q.y)) continue;
+      lo = lo.cwiseMin(Eigen::Vector2f(q.x, q.y));
+      hi = hi.cwiseMax(Eigen::Vector2f(q.x, q.y));
+    }
+    near.clear();
+    // Structures longer than any mover are not split (and would cost the most to test).
+    const bool mover_sized = (hi - lo).maxCoeff() <= p.max_mover_length + 2 * claim;
+    for (std::size_t k = 0; mover_sized && k < claimants.size(); ++k) {
+      const auto& cl = claimants[k];
+      if ((cl.lo.array() - claim <= hi.array()).all() &&
+          (lo.array() <= cl.hi.array() + claim).all())
+        near.push_back(k);
+    }
+    bool split = false;
+    // The cheap test first (most clusters near two tracks are static neighbours).
+    bool some_differ = false;
+    for (std::size_t a = 0; a < near.size() && !some_differ; ++a)
+      for (std::size_t b = a + 1; b < near.size() && !some_differ; ++b)
+        some_differ = differ(claimants[near[a]], claimants[near[b]]);
+    if (some_differ && static_cast<int>(idx.size()) >= 2 * kMinSplitPoints) {
+      // Each point to the nearest moved view among the nearby tracks.
+      owner.assign(idx.size(), -1);
+      best.assign(idx.size(), std::numeric_limits<float>::max());
+      for (std::size_t j = 0; j < idx.size(); ++j) {
+        const auto& q = cloud[idx[j]];
+        if (!std::isfinite(q.x) || !std::isfinite(q.y)) continue;
+        for (std::size_t k = 0; k < near.size(); ++k) {
+          const auto& cl = claimants[near[k]];
+          for (const auto& v : tracks_[cl.track].last_view) {
+            const float dx = q.x - (v.x() + cl.shift.x()), dy = q.y - (v.y() + cl.shift.y());
+            const float d2 = dx * dx + dy * dy;
+            if (d2 < best[j]) {
+              best[j] = d2;
+              owner[j] = static_cast<int>(k);
+            }
+          }
+        }
+      }
+      // Claims: enough points near each track's view.
+      std::vector<int> claimed(near.size(), 0);
+      for (std::size_t j = 0; j < idx.size(); ++j)
+        if (owner[j] >= 0 && best[j] <= claim2) ++claimed[static_cast<std::size_t>(owner[j])];
+      std::vector<std::size_t> claimers;
+      for (std::size_t k = 0; k < near.size(); ++k)
+        if (claimed[k] >= kMinSplitPoints) claimers.push_back(k);
+      bool moving_differently = false;
+      for (std::size_t a = 0; a < claimers.size(); ++a)
+        for (std::size_t b = a + 1; b < claimers.size(); ++b)
+          moving_differently = moving_differently ||
+                               differ(claimants[near[claimers[a]]], claimants[near[claimers[b]]]);
+      if (claimers.size() >= 2 && moving_differently) {
+        // Points go to the nearest claimer only (views of non-claimers do not compete).
+        std::vector<ClusterPart> pieces(claimers.size());
+        for (std::size_t j = 0; j < idx.size(); ++j) {
+          const auto& q = cloud[idx[j]];
+          std::size_t arg = 0;
+          float d_best = std::numeric_limits<float>::max();
+          if (std::isfinite(q.x) && std::isfinite(q.y))
+            for (std::size_t a = 0; a < claimers.size(); ++a) {
+              const auto& cl = claimants[near[claimers[a]]];
+              for (const auto& v : tracks_[cl.track].last_view) {
+                const float dx = q.x - (v.x() + cl.shift.x()), dy = q.y - (v.y() + cl.shift.y());
+                const float d2 = dx * dx + dy * dy;
+                if (d2 < d_best) {
+                  d_best = d2;
+                  arg = a;
+                }
+              }
+            }
+          pieces[arg].positions.push_back(static_cast<int>(j));
+        }
+        split = std::all_of(pieces.begin(), pieces.end(), [&](const ClusterPart& piece) {
+          return static_cast<int>(piece.positions.size()) >= kMinSplitPoints;
+        });
+        if (split) {
+          if (!any_split) {
+            // First split: the clusters before it become whole parts.
+            any_split = true;
+            for (std::size_t b = 0; b < c; ++b) {
+              ClusterPart whole;
+              whole.cluster = static_cast<int>(b);
+              whole.positions.resize(clusters[b].indices.size());
+              std::iota(whole.positions.begin(), whole.positions.end(), 0);
+              parts.push_back(std::move(whole));
+            }
+          }
+          for (auto& piece : pieces) {
+            piece.cluster = static_cast<int>(c);
+            parts.push_back(std::move(piece));
+          }
+        }
+      }
+    }
+    if (any_split && !split) {
+      ClusterPart whole;
+      whole.cluster = static_cast<int>(c);
+      whole.positions.resize(idx.size());
+      std::iota(whole.positions.begin(), whole.positions.end(), 0);
+      parts.push_back(std::move(whole));
+    }
+  }
+  return parts;
 }
 
 template <typename PointT>
@@ -502,7 +678,12 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     cand.features = computeFeatures(*cloud, clusters[c].indices);
     const double range =
         (cand.features.centroid.template head<2>() - sensor_origin.template head<2>()).norm();
-    cand.usable = cand.features.points >= p.min_cluster_points && range <= p.max_range;
+    // A part split off a merged cluster (occluded == 2) belongs to an established track: it is
+    // tracked down to kMinSplitPoints (a walker half hidden behind the one it passes).
+    const bool split_part = occluded.size() == clusters.size() && occluded[c] == 2;
+    cand.usable = (cand.features.points >= p.min_cluster_points ||
+                   (split_part && cand.features.points >= kMinSplitPoints)) &&
+                  range <= p.max_range;
     cand.features.large =
         cand.features.length > p.max_mover_length || cand.features.height > p.max_mover_height;
     cand.features.occluded = occluded.size() == clusters.size() && occluded[c] != 0;
@@ -842,6 +1023,14 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
       for (const auto& q : pts) world_points.emplace_back(q.x, q.y, q.z);
     }
     decideMover(t, world_points);
+    if (const auto& pts = candidates[m.cluster].points) {
+      const std::size_t n = pts->size();
+      const std::size_t stride =
+          std::max<std::size_t>(1, (n + kLastViewPoints - 1) / kLastViewPoints);
+      t.last_view.clear();
+      for (std::size_t k = 0; k < n; k += stride)
+        t.last_view.emplace_back((*pts)[k].x, (*pts)[k].y, (*pts)[k].z);
+    }
     if (!world_points.empty()) {
       t.past_points.push_back(std::move(world_points));
       while (static_cast<int>(t.past_points.size()) > p.free_space_lag + 1)
