@@ -65,6 +65,10 @@ namespace pcl_movers {
  *     a mover while its track lives (a car waiting at a light, a pedestrian pausing), unless it
  *     becomes a large structure.
  *
+ * Before update(), splitMergedClusters() cuts clusters that hold two established tracks moving
+ * differently (walkers passing each other) along their predicted views; MoverDetector does so
+ * every frame (`split_merged`).
+ *
  * The registered measurement is the track's reference point: the model grid is centred where the
  * object was first seen and the registration maps each new view onto it, so the measured position
  * is that reference point moved by the registered motion. It does not shift when a different part
