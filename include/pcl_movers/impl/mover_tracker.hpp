@@ -475,8 +475,6 @@ std::vector<typename MoverTracker<PointT>::ClusterPart> MoverTracker<PointT>::sp
   const float claim2 = claim * claim;
   bool any_split = false;
   std::vector<std::size_t> near;
-  std::vector<int> owner;
-  std::vector<float> best;
   for (std::size_t c = 0; c < clusters.size(); ++c) {
     const auto& idx = clusters[c].indices;
     // Cheap rejection by bounding boxes, of an even subsample of at most 64 points (this runs
@@ -505,28 +503,29 @@ std::vector<typename MoverTracker<PointT>::ClusterPart> MoverTracker<PointT>::sp
       for (std::size_t b = a + 1; b < near.size() && !some_differ; ++b)
         some_differ = differ(claimants[near[a]], claimants[near[b]]);
     if (some_differ && static_cast<int>(idx.size()) >= 2 * kMinSplitPoints) {
-      // Each point to the nearest moved view among the nearby tracks.
-      owner.assign(idx.size(), -1);
-      best.assign(idx.size(), std::numeric_limits<float>::max());
-      for (std::size_t j = 0; j < idx.size(); ++j) {
+      // Claims, on an even subsample of at most 128 points (each counts for `sample` points):
+      // each point to the nearest moved view among the nearby tracks, counted when within
+      // split_claim_distance of it.
+      const std::size_t sample = std::max<std::size_t>(1, idx.size() / 128);
+      std::vector<int> claimed(near.size(), 0);
+      for (std::size_t j = 0; j < idx.size(); j += sample) {
         const auto& q = cloud[idx[j]];
         if (!std::isfinite(q.x) || !std::isfinite(q.y)) continue;
+        float best = std::numeric_limits<float>::max();
+        std::size_t owner = 0;
         for (std::size_t k = 0; k < near.size(); ++k) {
           const auto& cl = claimants[near[k]];
           for (const auto& v : tracks_[cl.track].last_view) {
             const float dx = q.x - (v.x() + cl.shift.x()), dy = q.y - (v.y() + cl.shift.y());
             const float d2 = dx * dx + dy * dy;
-            if (d2 < best[j]) {
-              best[j] = d2;
-              owner[j] = static_cast<int>(k);
+            if (d2 < best) {
+              best = d2;
+              owner = k;
             }
           }
         }
+        if (best <= claim2) claimed[owner] += static_cast<int>(sample);
       }
-      // Claims: enough points near each track's view.
-      std::vector<int> claimed(near.size(), 0);
-      for (std::size_t j = 0; j < idx.size(); ++j)
-        if (owner[j] >= 0 && best[j] <= claim2) ++claimed[static_cast<std::size_t>(owner[j])];
       std::vector<std::size_t> claimers;
       for (std::size_t k = 0; k < near.size(); ++k)
         if (claimed[k] >= kMinSplitPoints) claimers.push_back(k);
