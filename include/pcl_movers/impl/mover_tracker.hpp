@@ -1103,7 +1103,15 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
       double best = std::numeric_limits<double>::max();
       for (std::size_t ti = 0; ti < existing; ++ti) {
         const Track& lost = tracks_[ti];
-        if (lost.missed < 1 || lost.large || !(lost.mover || lost.confirmed)) continue;
+        // A moving mover still tracked counts too when the new cluster is occluded: an object
+        // split by an occluder (a wooded car's front emerging past a trunk while its track keeps
+        // the hiding rear) is a second part of it, not a new object at rest. Not a latched mover
+        // standing still: a van turning past a car waiting at the junction took its zero velocity.
+        const bool split_by_occluder = cand.features.occluded && lost.confirmed &&
+                                       lost.reportedVelocity().norm() > p.mover_speed;
+        if ((lost.missed < 1 && !split_by_occluder) || lost.large ||
+            !(lost.mover || lost.confirmed))
+          continue;
         const double d = (cand.features.centroid.template head<2>() - lost.filter.position() -
                           lost.centroid_offset)
                              .norm();
