@@ -244,7 +244,8 @@ struct DetectorParameters {
   /// the predicted extent of a mover lost in the last frames (coasting) starts with that mover's
   /// velocity (σ `reacquire_velocity_sigma` [m/s]) instead of zero, and skips the line-fit restart
   /// of velocity_fit_init: its first positions slide while the object emerges from behind the
-  /// occluder that hid it.
+  /// occluder that hid it. An occluded cluster also inherits from a confirmed mover that is still
+  /// tracked and moving (the front of a car emerging past a trunk while its track keeps the rear).
   int reacquire_velocity = 1;
   double reacquire_velocity_sigma = 1.0;
 
