@@ -880,15 +880,9 @@ WalkerFrame walkersFrame(Tracker& tracker, double t, double va, double b0, doubl
   std::vector<std::uint8_t> occluded(clusters.size(), 0);
   const auto parts = tracker.splitMergedClusters(*scene.cloud, clusters, t);
   if (!parts.empty()) {
-    std::vector<pcl::PointIndices> split(parts.size());
-    occluded.assign(parts.size(), 0);
-    for (std::size_t k = 0; k < parts.size(); ++k) {
-      const auto& src = clusters[static_cast<std::size_t>(parts[k].cluster)].indices;
-      for (const int j : parts[k].positions) split[k].indices.push_back(src[j]);
-      occluded[k] = parts[k].positions.size() == src.size() ? 0 : 2;
-    }
-    out.split = split.size() > clusters.size();
-    clusters = split;
+    out.split = parts.size() > clusters.size();
+    occluded = Tracker::partFlags(parts, clusters, occluded);
+    clusters = Tracker::applyParts(parts, clusters);
   }
   tracker.update(scene.cloud, clusters, sensor, t, occluded);
   double best_a = 0.5, best_b = 0.5;

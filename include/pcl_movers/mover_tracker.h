@@ -222,6 +222,15 @@ class MoverTracker {
   std::vector<ClusterPart> splitMergedClusters(const PointCloud& cloud,
                                                const std::vector<pcl::PointIndices>& clusters,
                                                double time) const;
+  /** \brief The clusters `parts` (from splitMergedClusters()) describe, cut from `clusters` — or
+   * from any list parallel to it (MoverDetector cuts its world and sensor-frame lists alike). */
+  static std::vector<pcl::PointIndices> applyParts(const std::vector<ClusterPart>& parts,
+                                                   const std::vector<pcl::PointIndices>& clusters);
+  /** \brief The `occluded` flags of update() for the clusters of `parts`: 2 for a part cut from a
+   * cluster, the input cluster's flag (empty `occluded`: 0) for a whole one. */
+  static std::vector<std::uint8_t> partFlags(const std::vector<ClusterPart>& parts,
+                                             const std::vector<pcl::PointIndices>& clusters,
+                                             const std::vector<std::uint8_t>& occluded);
 
   /** \brief Scans for the free-space test (see DetectorParameters::free_space_lag); the map must
    * already hold the current frame's scan when update() is called. nullptr (default) disables the

@@ -211,24 +211,11 @@ void MoverDetector<PointT>::process(const PointCloudConstPtr& scan, const Eigen:
   // sensor-frame clusters (outputs) and occlusion flags follow the same split.
   const auto parts = tracker_.splitMergedClusters(*world, world_clusters, time);
   if (!parts.empty()) {
-    std::vector<pcl::PointIndices> split_world(parts.size()), split_sensor(parts.size());
-    std::vector<std::uint8_t> split_occluded(parts.size(), 0);
-    for (std::size_t k = 0; k < parts.size(); ++k) {
-      const auto c = static_cast<std::size_t>(parts[k].cluster);
-      const bool whole = parts[k].positions.size() == clusters[c].indices.size();
-      split_world[k].indices.reserve(parts[k].positions.size());
-      split_sensor[k].indices.reserve(parts[k].positions.size());
-      for (const int j : parts[k].positions) {
-        split_world[k].indices.push_back(world_clusters[c].indices[static_cast<std::size_t>(j)]);
-        split_sensor[k].indices.push_back(clusters[c].indices[static_cast<std::size_t>(j)]);
-      }
-      // A split part's side along the cut is not the object's extent: occluded (2 = split part,
-      // see MoverTracker::update()).
-      split_occluded[k] = !whole ? 2 : (c < occluded_.size() && occluded_[c] ? 1 : 0);
-    }
-    world_clusters = std::move(split_world);
-    clusters = std::move(split_sensor);
-    occluded_ = std::move(split_occluded);
+    // A split part's side along the cut is not the object's extent: occluded (flag 2, see
+    // MoverTracker::update()).
+    occluded_ = MoverTracker<PointT>::partFlags(parts, clusters, occluded_);
+    world_clusters = MoverTracker<PointT>::applyParts(parts, world_clusters);
+    clusters = MoverTracker<PointT>::applyParts(parts, clusters);
   }
   tracker_.update(world, world_clusters, pose.translation(), time, occluded_);
   const auto t5 = Clock::now();

@@ -473,6 +473,27 @@ std::vector<typename MoverTracker<PointT>::ClusterPart> MoverTracker<PointT>::sp
   };
   const float claim = static_cast<float>(p.split_claim_distance);
   const float claim2 = claim * claim;
+  // (index into `ids`, squared distance) of the claimant among `ids` whose moved view lies
+  // nearest to q in the horizontal plane.
+  const auto nearestView = [&](const PointT& q, const std::vector<std::size_t>& ids) {
+    std::pair<std::size_t, float> nearest(0, std::numeric_limits<float>::max());
+    for (std::size_t k = 0; k < ids.size(); ++k) {
+      const Claimant& cl = claimants[ids[k]];
+      for (const auto& v : tracks_[cl.track].last_view) {
+        const float dx = q.x - (v.x() + cl.shift.x()), dy = q.y - (v.y() + cl.shift.y());
+        const float d2 = dx * dx + dy * dy;
+        if (d2 < nearest.second) nearest = {k, d2};
+      }
+    }
+    return nearest;
+  };
+  const auto addWhole = [&](std::size_t b) {
+    ClusterPart whole;
+    whole.cluster = static_cast<int>(b);
+    whole.positions.resize(clusters[b].indices.size());
+    std::iota(whole.positions.begin(), whole.positions.end(), 0);
+    parts.push_back(std::move(whole));
+  };
   bool any_split = false;
   std::vector<std::size_t> near;
   for (std::size_t c = 0; c < clusters.size(); ++c) {
@@ -511,20 +532,8 @@ std::vector<typename MoverTracker<PointT>::ClusterPart> MoverTracker<PointT>::sp
       for (std::size_t j = 0; j < idx.size(); j += sample) {
         const auto& q = cloud[idx[j]];
         if (!std::isfinite(q.x) || !std::isfinite(q.y)) continue;
-        float best = std::numeric_limits<float>::max();
-        std::size_t owner = 0;
-        for (std::size_t k = 0; k < near.size(); ++k) {
-          const auto& cl = claimants[near[k]];
-          for (const auto& v : tracks_[cl.track].last_view) {
-            const float dx = q.x - (v.x() + cl.shift.x()), dy = q.y - (v.y() + cl.shift.y());
-            const float d2 = dx * dx + dy * dy;
-            if (d2 < best) {
-              best = d2;
-              owner = k;
-            }
-          }
-        }
-        if (best <= claim2) claimed[owner] += static_cast<int>(sample);
+        const auto nearest = nearestView(q, near);
+        if (nearest.second <= claim2) claimed[nearest.first] += static_cast<int>(sample);
       }
       std::vector<std::size_t> claimers;
       for (std::size_t k = 0; k < near.size(); ++k)
@@ -536,23 +545,13 @@ std::vector<typename MoverTracker<PointT>::ClusterPart> MoverTracker<PointT>::sp
                                differ(claimants[near[claimers[a]]], claimants[near[claimers[b]]]);
       if (claimers.size() >= 2 && moving_differently) {
         // Points go to the nearest claimer only (views of non-claimers do not compete).
+        std::vector<std::size_t> claimer_ids(claimers.size());
+        for (std::size_t a = 0; a < claimers.size(); ++a) claimer_ids[a] = near[claimers[a]];
         std::vector<ClusterPart> pieces(claimers.size());
         for (std::size_t j = 0; j < idx.size(); ++j) {
           const auto& q = cloud[idx[j]];
-          std::size_t arg = 0;
-          float d_best = std::numeric_limits<float>::max();
-          if (std::isfinite(q.x) && std::isfinite(q.y))
-            for (std::size_t a = 0; a < claimers.size(); ++a) {
-              const auto& cl = claimants[near[claimers[a]]];
-              for (const auto& v : tracks_[cl.track].last_view) {
-                const float dx = q.x - (v.x() + cl.shift.x()), dy = q.y - (v.y() + cl.shift.y());
-                const float d2 = dx * dx + dy * dy;
-                if (d2 < d_best) {
-                  d_best = d2;
-                  arg = a;
-                }
-              }
-            }
+          const std::size_t arg =
+              std::isfinite(q.x) && std::isfinite(q.y) ? nearestView(q, claimer_ids).first : 0;
           pieces[arg].positions.push_back(static_cast<int>(j));
         }
         split = std::all_of(pieces.begin(), pieces.end(), [&](const ClusterPart& piece) {
@@ -562,13 +561,7 @@ std::vector<typename MoverTracker<PointT>::ClusterPart> MoverTracker<PointT>::sp
           if (!any_split) {
             // First split: the clusters before it become whole parts.
             any_split = true;
-            for (std::size_t b = 0; b < c; ++b) {
-              ClusterPart whole;
-              whole.cluster = static_cast<int>(b);
-              whole.positions.resize(clusters[b].indices.size());
-              std::iota(whole.positions.begin(), whole.positions.end(), 0);
-              parts.push_back(std::move(whole));
-            }
+            for (std::size_t b = 0; b < c; ++b) addWhole(b);
           }
           for (auto& piece : pieces) {
             piece.cluster = static_cast<int>(c);
@@ -577,15 +570,37 @@ std::vector<typename MoverTracker<PointT>::ClusterPart> MoverTracker<PointT>::sp
         }
       }
     }
-    if (any_split && !split) {
-      ClusterPart whole;
-      whole.cluster = static_cast<int>(c);
-      whole.positions.resize(idx.size());
-      std::iota(whole.positions.begin(), whole.positions.end(), 0);
-      parts.push_back(std::move(whole));
-    }
+    if (any_split && !split) addWhole(c);
   }
   return parts;
+}
+
+template <typename PointT>
+std::vector<pcl::PointIndices> MoverTracker<PointT>::applyParts(
+    const std::vector<ClusterPart>& parts, const std::vector<pcl::PointIndices>& clusters) {
+  std::vector<pcl::PointIndices> out(parts.size());
+  for (std::size_t k = 0; k < parts.size(); ++k) {
+    const auto& source = clusters[static_cast<std::size_t>(parts[k].cluster)].indices;
+    out[k].indices.reserve(parts[k].positions.size());
+    for (const int j : parts[k].positions)
+      out[k].indices.push_back(source[static_cast<std::size_t>(j)]);
+  }
+  return out;
+}
+
+template <typename PointT>
+std::vector<std::uint8_t> MoverTracker<PointT>::partFlags(
+    const std::vector<ClusterPart>& parts, const std::vector<pcl::PointIndices>& clusters,
+    const std::vector<std::uint8_t>& occluded) {
+  std::vector<std::uint8_t> flags(parts.size(), 0);
+  for (std::size_t k = 0; k < parts.size(); ++k) {
+    const auto c = static_cast<std::size_t>(parts[k].cluster);
+    if (parts[k].positions.size() != clusters[c].indices.size())
+      flags[k] = 2;
+    else if (c < occluded.size())
+      flags[k] = occluded[c];
+  }
+  return flags;
 }
 
 template <typename PointT>
@@ -679,13 +694,13 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
         (cand.features.centroid.template head<2>() - sensor_origin.template head<2>()).norm();
     // A part split off a merged cluster (occluded == 2) belongs to an established track: it is
     // tracked down to kMinSplitPoints (a walker half hidden behind the one it passes).
-    const bool split_part = occluded.size() == clusters.size() && occluded[c] == 2;
+    const std::uint8_t flag = occluded.size() == clusters.size() ? occluded[c] : 0;
     cand.usable = (cand.features.points >= p.min_cluster_points ||
-                   (split_part && cand.features.points >= kMinSplitPoints)) &&
+                   (flag == 2 && cand.features.points >= kMinSplitPoints)) &&
                   range <= p.max_range;
     cand.features.large =
         cand.features.length > p.max_mover_length || cand.features.height > p.max_mover_height;
-    cand.features.occluded = occluded.size() == clusters.size() && occluded[c] != 0;
+    cand.features.occluded = flag != 0;
     results_[c].features = cand.features;
   }
 
