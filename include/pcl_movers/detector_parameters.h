@@ -227,7 +227,10 @@ struct DetectorParameters {
   double occluded_fraction = 0.45;
   /// Registered updates of occluded views the reported-velocity filter skips in a row while the
   /// track's velocity is known (from mover_min_age unoccluded views, or inherited on
-  /// re-acquisition); later ones are taken with the range-scaled σ. 0 = never skip.
+  /// re-acquisition); later ones are taken with the range-scaled σ. The first update after a
+  /// skipped run moves the filter's position to the measurement and keeps its velocity (and
+  /// that velocity's σ from before the run): the slide has moved the reference point on the
+  /// object, an offset that must not become a velocity. 0 = never skip.
   int occluded_skip = 10;
   /// Merged clusters (0 = off; registration mode): a cluster claimed by two or more established
   /// tracks (each with at least 4 of its points within split_claim_distance of the track's last

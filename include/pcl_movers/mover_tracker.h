@@ -118,7 +118,14 @@ class MoverTracker {
     int hits = 0;          ///< updates so far
     /// Born with the velocity of a coasting mover it re-acquires (see reacquire_velocity).
     bool reacquired = false;
-    int occluded_run = 0;        ///< consecutive registered updates of occluded views
+    /// The velocity inherited at birth (reacquired tracks), kept apart from the filter, whose
+    /// velocity follows the centroids of the partial views until the track gets its model.
+    Eigen::Vector2d inherited_velocity = Eigen::Vector2d::Zero();
+    int occluded_run = 0;  ///< consecutive registered updates of occluded views
+    /// Consecutive occluded updates the velocity filter skipped (occluded_skip).
+    int skipped_run = 0;
+    /// Velocity covariance of the velocity filter when the skipped run began.
+    Eigen::Matrix2d skip_velocity_covariance = Eigen::Matrix2d::Zero();
     int unoccluded_updates = 0;  ///< registered updates of unoccluded views so far
     int age = 0;                 ///< frames since birth
     int missed = 0;              ///< consecutive frames without update
@@ -346,9 +353,12 @@ class MoverTracker {
                                 double limit);
 
   /** \brief Records a registered position of `track` (after its tracking filter took it) and
-   * updates the track's velocity_filter with it; `since` [s] is the time since the last update. */
+   * updates the track's velocity_filter with it; `since` [s] is the time since the last update.
+   * `reanchor`: the first update after skipped occluded views moves the filter's position to
+   * the measurement and keeps its velocity (see occluded_skip). */
   void updateVelocityFilter(Track& track, const Eigen::Vector3d& measurement, double similarity,
-                            bool occluded, double time, double range, double since) const;
+                            bool occluded, double time, double range, double since,
+                            bool reanchor = false) const;
 
   /** \brief Updates the mover flag of a track after an update; `points` are the world points of
    * the cluster just assigned (for the free-space test). */

@@ -317,8 +317,30 @@ void MoverTracker<PointT>::limitAcceleration(KalmanFilterCV& filter,
 template <typename PointT>
 void MoverTracker<PointT>::updateVelocityFilter(Track& track, const Eigen::Vector3d& measurement,
                                                 double similarity, bool occluded, double time,
-                                                double range, double since) const {
+                                                double range, double since, bool reanchor) const {
   const auto& p = parameters_;
+  if (reanchor && track.velocity_filter.isInitialized()) {
+    // The skipped views' registered positions slid with the visible part (an emerging car's
+    // grew backwards by 3.5 m: it registered at 4.8 m/s for 7), so the object's reference point
+    // now sits somewhere else on it. That offset is a position error, not a velocity: taken as a
+    // measurement it turned the velocity the filter had coasted on (7.0 m/s, right) into 4.4,
+    // which took 12 frames to recover. The filter moves to the measurement and keeps its
+    // velocity; the positions before the skip, measured with the old offset, leave the
+    // manoeuvre fit.
+    track.registered.clear();
+    track.registered.emplace_back(measurement.x(), measurement.y(), time);
+    KalmanFilterCV::State state = track.velocity_filter.getState();
+    state.template head<2>() = measurement.template head<2>();
+    KalmanFilterCV::Covariance cov = track.velocity_filter.getCovariance();
+    const double sigma = registeredSigma(track, measurement, similarity, occluded, time, range);
+    cov.template topLeftCorner<2, 2>() = Eigen::Matrix2d::Identity() * sigma * sigma;
+    cov.template topRightCorner<2, 2>().setZero();
+    cov.template bottomLeftCorner<2, 2>().setZero();
+    cov.template bottomRightCorner<2, 2>() = track.skip_velocity_covariance;
+    track.velocity_filter.setState(state);
+    track.velocity_filter.setCovariance(cov);
+    return;
+  }
   track.registered.emplace_back(measurement.x(), measurement.y(), time);
   while (static_cast<int>(track.registered.size()) > p.manoeuvre_window)
     track.registered.pop_front();
@@ -922,9 +944,15 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
       t.occluded_run = cand.features.occluded ? t.occluded_run + 1 : 0;
       if (!cand.features.occluded) ++t.unoccluded_updates;
     }
-    if (registered && !skip_occluded)
+    if (registered && !skip_occluded) {
       updateVelocityFilter(t, m.measurement, m.similarity, cand.features.occluded, time, range,
-                           since);
+                           since, t.skipped_run > 0);
+      t.skipped_run = 0;
+    } else if (skip_occluded) {
+      if (t.skipped_run++ == 0)
+        t.skip_velocity_covariance =
+            t.velocity_filter.getCovariance().template bottomRightCorner<2, 2>();
+    }
     t.z = m.measurement.z();
     t.last_time = time;
     ++t.hits;
@@ -1015,10 +1043,12 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
         cand.features.height >= 0.5 * p.min_mover_height) {
       ensurePoints(*cloud, clusters[m.cluster], candidates[m.cluster]);
       t.model = makeModel(candidates[m.cluster], sensor_origin);
-      // A re-acquired track keeps the velocity it inherited (not its centroid velocity).
+      // A re-acquired track keeps the velocity it inherited, not what its filter made of the
+      // partial views' centroids since (a wooded car's front emerging past a trunk: a jump to
+      // another fragment gave it 2 m/s across its path, reported for the next 7 frames).
       t.filter.initialize(cand.features.centroid.template head<2>(),
                           Eigen::Matrix2d::Identity() * meas_sigma * meas_sigma,
-                          t.reacquired ? t.filter.velocity() : Eigen::Vector2d::Zero(),
+                          t.reacquired ? t.inherited_velocity : Eigen::Vector2d::Zero(),
                           t.reacquired ? p.reacquire_velocity_sigma : p.initial_velocity_sigma);
       t.centroid_offset.setZero();
       t.velocity_filter = KalmanFilterCV();
@@ -1139,6 +1169,7 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
           v0 = lost.reportedVelocity();
           v0_sigma = p.reacquire_velocity_sigma;
           t.reacquired = true;
+          t.inherited_velocity = v0;
         }
       }
     }
