@@ -75,6 +75,14 @@ struct DetectorParameters {
   double min_sigma = 0.1;
   /// Yaw layers of the registration (1 = translation only; the paper used 3-5).
   int yaw_samples = 1;
+  /// Turning movers (registration mode): when a mover's candidate does not match its model
+  /// confidently (B < registration_stop_similarity), it is registered again with this many yaw
+  /// layers, turn_yaw_step_deg apart (1 = off); the turned match is taken when its B is higher
+  /// by more than turn_min_gain. The yaw found stays with the track (later views are turned by
+  /// it onto the model) and turns the track's velocity with the object's heading.
+  int turn_yaw_samples = 7;
+  double turn_yaw_step_deg = 5.0;
+  double turn_min_gain = 0.05;
   /// A registered candidate is only an update when its Bhattacharyya similarity reaches this
   /// (low B = occlusion or wrong object).
   double min_similarity = 0.35;
@@ -297,6 +305,10 @@ void DetectorParameters::forEachParameter(F&& f) {
   f("sigma_per_metre", sigma_per_metre, "Gaussian sigma per metre of range");
   f("min_sigma", min_sigma, "lower bound of the Gaussian sigma [m]");
   f("yaw_samples", yaw_samples, "yaw layers of the registration (1 = translation only)");
+  f("turn_yaw_samples", turn_yaw_samples,
+    "yaw layers of a mover's second registration when the first fails (1 = off)");
+  f("turn_yaw_step_deg", turn_yaw_step_deg, "step between those yaw layers [deg]");
+  f("turn_min_gain", turn_min_gain, "B gain a turned match needs over the unturned one");
   f("min_similarity", min_similarity, "min Bhattacharyya similarity of an update");
   f("max_registration_points", max_registration_points, "subsample clusters to this many points");
   f("young_search_radius", young_search_radius, "search radius for tracks seen once [m]");
@@ -470,6 +482,10 @@ inline void DetectorParameters::validate() const {
   positive("sigma_per_metre", sigma_per_metre);
   positive("min_sigma", min_sigma);
   positive("yaw_samples", yaw_samples);
+  positive("turn_yaw_samples", turn_yaw_samples);
+  positive("turn_yaw_step_deg", turn_yaw_step_deg);
+  if (!(turn_min_gain >= 0 && turn_min_gain <= 1))
+    throw InputError("parameter turn_min_gain must be in [0, 1]");
   positive("model_half_life", model_half_life);
   positive("max_registration_points", max_registration_points);
   positive("young_search_radius", young_search_radius);

@@ -122,6 +122,8 @@ class MoverTracker {
     /// velocity follows the centroids of the partial views until the track gets its model.
     Eigen::Vector2d inherited_velocity = Eigen::Vector2d::Zero();
     int occluded_run = 0;  ///< consecutive registered updates of occluded views
+    /// Yaw [rad] that turns the track's current views onto its model (turn_yaw_samples).
+    double model_yaw = 0;
     /// Consecutive occluded updates the velocity filter skipped (occluded_skip).
     int skipped_run = 0;
     /// Velocity covariance of the velocity filter when the skipped run began.
@@ -347,6 +349,9 @@ class MoverTracker {
    * bounded by a nearer object) keep the prior. */
   double registeredSigma(const Track& track, const Eigen::Vector3d& measurement, double similarity,
                          bool occluded, double time, double range) const;
+
+  /** \brief Turns the velocity of `filter` (and its covariance) by `angle` [rad]. */
+  static void rotateVelocity(KalmanFilterCV& filter, double angle);
 
   /** \brief Clamps the velocity change of `filter` since `v_before` to `limit` [m/s]. */
   static void limitAcceleration(KalmanFilterCV& filter, const Eigen::Vector2d& v_before,
