@@ -868,6 +868,46 @@ TEST(MoverTracker, VelocityAfterTheSkippedSlideOfAnEmergingCarStaysRight) {
   EXPECT_LT(emergingVelocityError(1, 3.0, 45, true), 2.0);
 }
 
+// A car first seen emerging from behind a wall (no earlier track to inherit from): while its
+// rear is hidden the visible part grows from the wall's edge, which stays put, so those views
+// are flagged occluded and their registered positions slide towards "no motion". The line the
+// filters restart from at the third update runs through them (3 m/s for 8); once the whole car
+// is in view, its third unoccluded view restarts the filters from the unoccluded positions
+// alone. Returns the worst reported velocity error over the 6 frames after that restart
+// (measured: 0.11 m/s; 3.8 m/s without the restart).
+double velocityErrorAfterEmergingFromAWall() {
+  Tracker tracker;
+  tracker.setParameters(defaults());
+  const Eigen::Vector3d sensor(0, 0, 1.7);
+  const double speed = 8.0, half_length = 2.25;
+  double worst = 0;
+  int unoccluded = 0, scored = 0;
+  for (int k = 0; k < 20; ++k) {
+    const double t = k * 0.1;
+    const Eigen::Vector2d centre(-half_length + 0.6 + speed * t, 30.0);
+    SceneBuilder scene;
+    scene.addBox(sensor, centre, 0, 2 * half_length, 1.9, 1.6);
+    pcl::PointIndices visible;  // the wall hides x < 0
+    for (const int i : scene.clusters[0].indices)
+      if ((*scene.cloud)[i].x > 0) visible.indices.push_back(i);
+    scene.clusters.assign(1, visible);
+    const bool cut = centre.x() - half_length < 0;
+    tracker.update(scene.cloud, scene.clusters, sensor, t,
+                   std::vector<std::uint8_t>(1, cut ? 1 : 0));
+    if (cut) continue;
+    if (++unoccluded < 3 || unoccluded > 8) continue;
+    const auto& r = tracker.getClusterResults()[0];
+    worst = std::max(worst, (r.velocity - Eigen::Vector2d(speed, 0)).norm());
+    ++scored;
+  }
+  EXPECT_EQ(scored, 6);
+  return worst;
+}
+
+TEST(MoverTracker, EmergingCarRestartsItsVelocityFromItsUnoccludedViews) {
+  EXPECT_LT(velocityErrorAfterEmergingFromAWall(), 1.0);
+}
+
 namespace {
 
 /** One frame of two walkers on parallel lines 0.8 m apart (A from x = -6 at va, B from x = b0 at

@@ -162,7 +162,10 @@ struct DetectorParameters {
   /// centroid updates always use.
   int fast_from_fit = 1;
   /// 1 = at a track's third registered update its Kalman filter restarts from the least-squares
-  /// line through its three positions (see MoverTracker); 0 = the filter runs on from birth.
+  /// line through its three positions (see MoverTracker), and a track whose first views were
+  /// occluded (their positions slide while the object emerges) restarts again from the line
+  /// through its first three unoccluded views (urban velocity RMS 0.357 -> 0.326 m/s); 0 = the
+  /// filter runs on from birth.
   int velocity_fit_init = 1;
   /// A track is a mover when its speed exceeded mover_speed in mover_votes of its last
   /// mover_window updates, it has at least mover_min_age updates, and the displacement of its

@@ -129,12 +129,18 @@ class MoverTracker {
     /// Velocity covariance of the velocity filter when the skipped run began.
     Eigen::Matrix2d skip_velocity_covariance = Eigen::Matrix2d::Zero();
     int unoccluded_updates = 0;  ///< registered updates of unoccluded views so far
-    int age = 0;                 ///< frames since birth
-    int missed = 0;              ///< consecutive frames without update
-    bool mover = false;          ///< mover decision after the last update
-    bool large = false;          ///< static structure tracked by centroid
-    double similarity = 0;       ///< B of the last update (0 in centroid mode / at birth)
-    ClusterFeatures features;    ///< geometry of the last cluster assigned
+    /// A view of the track was occluded (birth included): its velocity_fit_init line may hold
+    /// sliding positions.
+    bool seen_occluded = false;
+    /// (x, y, time) of the first run of kUnoccludedFitPositions consecutive registered
+    /// unoccluded positions (shorter while it is being collected).
+    std::deque<Eigen::Vector3d> unoccluded_positions;
+    int age = 0;               ///< frames since birth
+    int missed = 0;            ///< consecutive frames without update
+    bool mover = false;        ///< mover decision after the last update
+    bool large = false;        ///< static structure tracked by centroid
+    double similarity = 0;     ///< B of the last update (0 in centroid mode / at birth)
+    ClusterFeatures features;  ///< geometry of the last cluster assigned
     /// Cluster centroid minus measured reference point at the last update (x, y): the reference
     /// point stays where the object was first seen while the visible part (and so the centroid)
     /// changes with the view, so candidates are gated against the predicted *centroid*.
@@ -172,8 +178,13 @@ class MoverTracker {
     std::vector<Eigen::Vector3f> last_view;
   };
   static constexpr std::size_t kLastViewPoints = 64;
+  /// Unoccluded registered positions the filters restart from (see velocity_fit_init).
+  static constexpr int kUnoccludedFitPositions = 3;
   /// Smallest part splitMergedClusters() cuts off, and tracks (see update()).
   static constexpr int kMinSplitPoints = 4;
+  /// Flag of update()'s `occluded` for a part cut from a merged cluster by splitMergedClusters()
+  /// (partFlags()); a bit of its own, beside RangeImageRegionGrowing's side bits (1 and 2).
+  static constexpr std::uint8_t kSplitPart = 4;
 
   /** \brief A cluster of the frame after splitMergedClusters(): the input cluster it comes from
    * and the positions, in that cluster's index list, of its points. */
@@ -210,9 +221,9 @@ class MoverTracker {
    * read) \param clusters point indices of each object cluster \param sensor_origin sensor position
    * in the world frame (ranges → density σ) \param time frame time [s], increasing
    * \param occluded per cluster, whether a side of it is bounded by a nearer object
-   * (RangeImageRegionGrowing::occludedSides(), non-zero = occluded; 2 = a part of a merged cluster
-   * split by splitMergedClusters(), also tracked below min_cluster_points, down to
-   * kMinSplitPoints); empty = unknown (none) */
+   * (RangeImageRegionGrowing::occludedSides(), non-zero = occluded; the kSplitPart bit = a part
+   * of a merged cluster split by splitMergedClusters(), also tracked below min_cluster_points,
+   * down to kMinSplitPoints); empty = unknown (none) */
   void update(const PointCloudConstPtr& cloud, const std::vector<pcl::PointIndices>& clusters,
               const Eigen::Vector3d& sensor_origin, double time,
               const std::vector<std::uint8_t>& occluded = {});
@@ -235,8 +246,8 @@ class MoverTracker {
    * from any list parallel to it (MoverDetector cuts its world and sensor-frame lists alike). */
   static std::vector<pcl::PointIndices> applyParts(const std::vector<ClusterPart>& parts,
                                                    const std::vector<pcl::PointIndices>& clusters);
-  /** \brief The `occluded` flags of update() for the clusters of `parts`: 2 for a part cut from a
-   * cluster, the input cluster's flag (empty `occluded`: 0) for a whole one. */
+  /** \brief The `occluded` flags of update() for the clusters of `parts`: kSplitPart for a part cut
+   * from a cluster, the input cluster's flag (empty `occluded`: 0) for a whole one. */
   static std::vector<std::uint8_t> partFlags(const std::vector<ClusterPart>& parts,
                                              const std::vector<pcl::PointIndices>& clusters,
                                              const std::vector<std::uint8_t>& occluded);
@@ -352,6 +363,10 @@ class MoverTracker {
 
   /** \brief Turns the velocity of `filter` (and its covariance) by `angle` [rad]. */
   static void rotateVelocity(KalmanFilterCV& filter, double angle);
+
+  /** \brief Restarts the track's filters (tracking, and velocity once initialized) from the
+   * line `fit` of its positions, with that line's covariance; nothing when it is not valid. */
+  static void restartFromLine(Track& track, const LineFit& fit, double time);
 
   /** \brief Clamps the velocity change of `filter` since `v_before` to `limit` [m/s]. */
   static void limitAcceleration(KalmanFilterCV& filter, const Eigen::Vector2d& v_before,

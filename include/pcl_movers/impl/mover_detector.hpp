@@ -211,7 +211,7 @@ void MoverDetector<PointT>::process(const PointCloudConstPtr& scan, const Eigen:
   // sensor-frame clusters (outputs) and occlusion flags follow the same split.
   const auto parts = tracker_.splitMergedClusters(*world, world_clusters, time);
   if (!parts.empty()) {
-    // A split part's side along the cut is not the object's extent: occluded (flag 2, see
+    // A split part's side along the cut is not the object's extent: occluded (kSplitPart, see
     // MoverTracker::update()).
     occluded_ = MoverTracker<PointT>::partFlags(parts, clusters, occluded_);
     world_clusters = MoverTracker<PointT>::applyParts(parts, world_clusters);

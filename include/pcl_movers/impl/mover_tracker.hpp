@@ -339,6 +339,29 @@ void MoverTracker<PointT>::rotateVelocity(KalmanFilterCV& filter, double angle) 
 }
 
 template <typename PointT>
+void MoverTracker<PointT>::restartFromLine(Track& track, const LineFit& fit, double time) {
+  if (!fit.valid) return;
+  const double stt = fit.time_spread;
+  const Eigen::Vector2d& v = fit.velocity;
+  const double s2 = fit.sigma_v * fit.sigma_v * stt;  // σ² of one position
+  const double dt_now = time - fit.mean_time;
+  KalmanFilterCV::State state;
+  state.template head<2>() = fit.mean_position + v * dt_now;
+  state.template tail<2>() = v;
+  KalmanFilterCV::Covariance cov = KalmanFilterCV::Covariance::Zero();
+  const double var_p = s2 * (1.0 / static_cast<double>(fit.positions) + dt_now * dt_now / stt);
+  const double var_v = s2 / stt, cov_pv = s2 * dt_now / stt;
+  for (int a = 0; a < 2; ++a) {
+    cov(a, a) = var_p;
+    cov(a + 2, a + 2) = var_v;
+    cov(a, a + 2) = cov(a + 2, a) = cov_pv;
+  }
+  track.filter.setState(state);
+  track.filter.setCovariance(cov);
+  if (track.velocity_filter.isInitialized()) track.velocity_filter = track.filter;
+}
+
+template <typename PointT>
 void MoverTracker<PointT>::limitAcceleration(KalmanFilterCV& filter,
                                              const Eigen::Vector2d& v_before, double limit) {
   Eigen::Vector2d dv = filter.velocity() - v_before;
@@ -653,7 +676,7 @@ std::vector<std::uint8_t> MoverTracker<PointT>::partFlags(
   for (std::size_t k = 0; k < parts.size(); ++k) {
     const auto c = static_cast<std::size_t>(parts[k].cluster);
     if (parts[k].positions.size() != clusters[c].indices.size())
-      flags[k] = 2;
+      flags[k] = kSplitPart;
     else if (c < occluded.size())
       flags[k] = occluded[c];
   }
@@ -749,11 +772,13 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     cand.features = computeFeatures(*cloud, clusters[c].indices);
     const double range =
         (cand.features.centroid.template head<2>() - sensor_origin.template head<2>()).norm();
-    // A part split off a merged cluster (occluded == 2) belongs to an established track: it is
-    // tracked down to kMinSplitPoints (a walker half hidden behind the one it passes).
+    // A part split off a merged cluster (kSplitPart) belongs to an established track: it is
+    // tracked down to kMinSplitPoints (a walker half hidden behind the one it passes). Its own
+    // bit: with the value 2 it once shared, a cluster whose right side was occluded was tracked
+    // down to kMinSplitPoints too.
     const std::uint8_t flag = occluded.size() == clusters.size() ? occluded[c] : 0;
     cand.usable = (cand.features.points >= p.min_cluster_points ||
-                   (flag == 2 && cand.features.points >= kMinSplitPoints)) &&
+                   ((flag & kSplitPart) && cand.features.points >= kMinSplitPoints)) &&
                   range <= p.max_range;
     cand.features.large =
         cand.features.length > p.max_mover_length || cand.features.height > p.max_mover_height;
@@ -1018,36 +1043,34 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     t.large = cand.features.large;
     t.history.emplace_back(m.measurement.x(), m.measurement.y(), time);
     while (static_cast<int>(t.history.size()) > p.mover_window + 1) t.history.pop_front();
+    // The first run of kUnoccludedFitPositions consecutive unoccluded registered positions.
+    bool unoccluded_fit_ready = false;
+    if (registered && static_cast<int>(t.unoccluded_positions.size()) < kUnoccludedFitPositions) {
+      if (cand.features.occluded) {
+        t.unoccluded_positions.clear();
+      } else {
+        t.unoccluded_positions.emplace_back(m.measurement.x(), m.measurement.y(), time);
+        unoccluded_fit_ready =
+            static_cast<int>(t.unoccluded_positions.size()) == kUnoccludedFitPositions;
+      }
+    }
     if (p.velocity_fit_init && registered && t.hits == 3 && !t.reacquired) {
       // A young track's Kalman velocity converges slowly: its birth position carries
       // registration_sigma while later positions carry the range-scaled σ, so the filter stays
       // anchored on the birth position (a car at 80 m took 10+ frames). At the third
       // registration the filter restarts from the least-squares line through the three
       // positions, with that line's covariance (σ as in the updates, or the scatter if larger).
-      const LineFit fit = fitVelocity(t.history, meas_sigma);
-      if (fit.valid) {
-        const double t_mean = fit.mean_time, stt = fit.time_spread;
-        const Eigen::Vector2d& x_mean = fit.mean_position;
-        const Eigen::Vector2d& v = fit.velocity;
-        const double s2 = fit.sigma_v * fit.sigma_v * stt;  // σ² of one position
-        const double dt_now = time - t_mean;
-        KalmanFilterCV::State state;
-        state.template head<2>() = x_mean + v * dt_now;
-        state.template tail<2>() = v;
-        KalmanFilterCV::Covariance cov = KalmanFilterCV::Covariance::Zero();
-        const double var_p =
-            s2 * (1.0 / static_cast<double>(fit.positions) + dt_now * dt_now / stt);
-        const double var_v = s2 / stt, cov_pv = s2 * dt_now / stt;
-        for (int a = 0; a < 2; ++a) {
-          cov(a, a) = var_p;
-          cov(a + 2, a + 2) = var_v;
-          cov(a, a + 2) = cov(a + 2, a) = cov_pv;
-        }
-        t.filter.setState(state);
-        t.filter.setCovariance(cov);
-        if (t.velocity_filter.isInitialized()) t.velocity_filter = t.filter;
-      }
+      restartFromLine(t, fitVelocity(t.history, meas_sigma), time);
+    } else if (p.velocity_fit_init && unoccluded_fit_ready && t.seen_occluded && !t.reacquired &&
+               t.unoccluded_updates == kUnoccludedFitPositions) {
+      // That line went through occluded views, whose positions slide with the visible part
+      // towards "no motion" (urban car 4 emerging past a building corner at 8 m/s: 3.0 m/s from
+      // the line, then 7 frames to reach 6.7 m/s, where it coasted through the next occlusion).
+      // The third unoccluded view restarts the filters from the line through the unoccluded
+      // positions alone.
+      restartFromLine(t, fitVelocity(t.unoccluded_positions, meas_sigma), time);
     }
+    if (cand.features.occluded) t.seen_occluded = true;
     if (p.fast_from_fit && registered) {
       // Fast only when a straight line fits the measured positions of the window with a speed
       // above the threshold and well above its uncertainty, the uncertainty taken from the
@@ -1100,6 +1123,8 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
       t.centroid_offset.setZero();
       t.velocity_filter = KalmanFilterCV();
       t.registered.clear();
+      t.unoccluded_positions.clear();
+      t.seen_occluded = cand.features.occluded;
       t.z = cand.features.centroid.z();
       t.hits = 1;
       t.fast.assign(1, 0);
@@ -1230,6 +1255,7 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     t.max_height = cand.features.large ? 0.0 : cand.features.height;
     t.max_length = cand.features.large ? 0.0 : cand.features.length;
     t.fast.push_back(0);
+    t.seen_occluded = cand.features.occluded;
     t.history.emplace_back(cand.features.centroid.x(), cand.features.centroid.y(), time);
     if (use_registration && !t.large && cand.features.height >= 0.5 * p.min_mover_height) {
       ensurePoints(*cloud, clusters[c], cand);
