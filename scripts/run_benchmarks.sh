@@ -10,7 +10,7 @@ grep -q 'CMAKE_BUILD_TYPE:STRING=Release' "$BUILD_DIR/CMakeCache.txt" ||
   { echo "error: $BUILD_DIR is not a Release build; timings would mislead" >&2; exit 1; }
 machine() {
   # The speed ratios against PCL's classes hold per machine only: on two machines with the same
-  # CPU name and PCL package, ICP and NDT took three times as long on one as on the other while
+  # CPU name and PCL package, ICP and NDT took 2-3 times as long on one as on the other while
   # BhattacharyaRegistration took the same time (docs/benchmarks.md, 2026-11-25 vs 2026-12-01).
   # The clock and FLANN (the kd-tree ICP and NDT search in) tell such machines apart.
   echo "Machine: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//') at $(grep -m1 'cpu MHz' /proc/cpuinfo | cut -d: -f2 | awk '{printf "%.0f", $1}') MHz, $(nproc) cores, $(free -g | awk '/Mem:/{print $2}') GiB RAM; $(g++ --version | head -1); PCL $(dpkg-query -W -f='${Version}' libpcl-dev 2>/dev/null || echo '?'), FLANN $(dpkg-query -W -f='${Version}' libflann-dev 2>/dev/null || echo '?')."
