@@ -935,7 +935,7 @@ void BM_TrackerPattern(benchmark::State& state) {
     reg.setResolution(0.2f);
     reg.setSearchRadius(radius);
     reg.setYawSamples(1);
-    reg.setSigmaPerMetre(0.005f);
+    reg.setSigmaPerMetre(0.003f);  // DetectorParameters::sigma_per_metre
     reg.setMinSigma(0.1f);
     reg.setMinSimilarity(0.3f);
     reg.setComputeSourceDensity(true);
