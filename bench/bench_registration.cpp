@@ -172,6 +172,25 @@ double median(std::vector<float> v) {
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
+/** Successes (error < threshold) among all trials and among those with offsets up to 2.5 m (the
+ * first three offset bins). */
+struct Successes {
+  int ok = 0, n = 0, ok25 = 0, n25 = 0;
+};
+Successes countSuccesses(const Result& r, float threshold) {
+  Successes c;
+  for (std::size_t i = 0; i < r.err.size(); ++i) {
+    const bool s = r.err[i] < threshold;
+    c.ok += s;
+    ++c.n;
+    if (r.bin[i] < 3) {
+      c.ok25 += s;
+      ++c.n25;
+    }
+  }
+  return c;
+}
+
 /** Every method on every trial, the methods taking turns on each trial: the machine's speed
  * drifts over a run (other load, frequency), and interleaving exposes every method to the same
  * drift, so the time ratios between methods stay fair. */
@@ -437,13 +456,8 @@ int report() {
   // the measured values so that a regeneration shows at once which ones hold on this machine.
   {
     auto success25 = [](const Result& r, float threshold) {
-      int ok = 0, n = 0;
-      for (std::size_t i = 0; i < r.err.size(); ++i)
-        if (r.bin[i] < 3) {
-          ok += r.err[i] < threshold;
-          ++n;
-        }
-      return n > 0 ? 100.0 * ok / n : NAN;
+      const Successes c = countSuccesses(r, threshold);
+      return c.n25 > 0 ? 100.0 * c.ok25 / c.n25 : NAN;
     };
     auto ratio = [](const std::vector<Result>& r, std::size_t other) {
       return r.empty() ? NAN : median(r[other].ms) / median(r[1].ms);
@@ -534,17 +548,9 @@ int report() {
                return pcl::Registration<pcl::PointXYZ, pcl::PointXYZ>::Ptr(r);
              }};
     const Result r = run(m, sim, trials);
-    int ok = 0, ok25 = 0, n25 = 0;
-    for (std::size_t i = 0; i < r.err.size(); ++i) {
-      ok += r.err[i] < 0.1f;
-      if (r.bin[i] < 3) {
-        ok25 += r.err[i] < 0.1f;
-        ++n25;
-      }
-    }
-    std::printf("| %s | %s | %s | %.3f | %.2f |\n", v.name,
-                pct(ok, static_cast<int>(r.err.size())).c_str(), pct(ok25, n25).c_str(),
-                median(r.err), median(r.ms));
+    const Successes c = countSuccesses(r, 0.1f);
+    std::printf("| %s | %s | %s | %.3f | %.2f |\n", v.name, pct(c.ok, c.n).c_str(),
+                pct(c.ok25, c.n25).c_str(), median(r.err), median(r.ms));
   }
   return 0;
 }
@@ -566,14 +572,9 @@ int quick(const char* dump) {
     for (std::size_t k = 0; k < ms.size(); ++k) {
       const Method& m = ms[k];
       const Result& r = results[k];
-      int ok = 0, ok25 = 0, n25 = 0;
+      const Successes c = countSuccesses(r, threshold);
       double total = 0.0;
       for (std::size_t i = 0; i < r.err.size(); ++i) {
-        ok += r.err[i] < threshold;
-        if (r.bin[i] < 3) {
-          ok25 += r.err[i] < threshold;
-          ++n25;
-        }
         total += r.ms[i];
         if (out)
           std::fprintf(out, "%s\t%s\t%zu\t%.5f\t%.5f\n", set, m.name.c_str(), i, r.err[i],
@@ -582,9 +583,8 @@ int quick(const char* dump) {
       std::printf(
           "%-9s | %-45s | success %s | <=2.5 m %s | median err %.4f | median %.3f ms | "
           "mean %.3f ms\n",
-          set, m.name.c_str(), pct(ok, static_cast<int>(r.err.size())).c_str(),
-          pct(ok25, n25).c_str(), median(r.err), median(r.ms),
-          total / std::max<std::size_t>(1, r.ms.size()));
+          set, m.name.c_str(), pct(c.ok, c.n).c_str(), pct(c.ok25, c.n25).c_str(), median(r.err),
+          median(r.ms), total / std::max<std::size_t>(1, r.ms.size()));
     }
     // ms = {BR 1 yaw, BR 5 yaws, ICP, NDT, BR 5 yaws with occluders}
     std::printf("%-9s | median time ratios: NDT / BR 5 yaws %.1fx, ICP / BR 5 yaws %.1fx\n", set,

@@ -656,7 +656,7 @@ TEST(MoverTracker, WellMeasuredMoverConfirmsEarly) {
   EXPECT_GE(firstMoverFrame(slow, {10, -1}, walk, person, 0), 4);
   EXPECT_LE(firstMoverFrame(defaults(), {10, -1}, walk, person, 0), 3);
   EXPECT_GE(firstMoverFrame(slow, {15, -6}, drive, car, 0), 4);
-  EXPECT_LE(firstMoverFrame(defaults(), {15, -6}, drive, car, 0), 3);
+  EXPECT_EQ(firstMoverFrame(defaults(), {15, -6}, drive, car, 0), 3);
 }
 
 // The same pedestrian with 8 cm of frame-to-frame position error (poorly registered views), and
