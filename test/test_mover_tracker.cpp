@@ -652,11 +652,13 @@ TEST(MoverTracker, WellMeasuredMoverConfirmsEarly) {
   const Eigen::Vector3d person(0.6, 0.6, 1.8), car(4.4, 1.8, 1.5);
   const Eigen::Vector2d walk(0, 1.4), drive(0, 10.0);
   // Measured: the pedestrian at the 4th update (5th/6th without the early rule), the car at the
-  // 4th (5th without; the 3rd with the blurrier densities of sigma_per_metre 0.01).
+  // 4th in the GCC Release build and the 3rd in CI's Clang sanitizer build (5th without; the 3rd
+  // in both with the blurrier densities of sigma_per_metre 0.01). Its bound is therefore "before
+  // the M-of-N rule", as the pedestrian's: an exact frame differs between compilers.
   EXPECT_GE(firstMoverFrame(slow, {10, -1}, walk, person, 0), 4);
   EXPECT_LE(firstMoverFrame(defaults(), {10, -1}, walk, person, 0), 3);
   EXPECT_GE(firstMoverFrame(slow, {15, -6}, drive, car, 0), 4);
-  EXPECT_EQ(firstMoverFrame(defaults(), {15, -6}, drive, car, 0), 3);
+  EXPECT_LE(firstMoverFrame(defaults(), {15, -6}, drive, car, 0), 3);
 }
 
 // The same pedestrian with 8 cm of frame-to-frame position error (poorly registered views), and
