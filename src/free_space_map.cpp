@@ -80,7 +80,10 @@ FreeSpaceMap::Evidence FreeSpaceMap::test(const std::vector<Eigen::Vector3f>& wo
         if (v > 0.0f && (nearest == 0.0f || v < nearest)) nearest = v;
       }
     }
-    if (nearest == 0.0f) continue;  // nothing returned around there: unknown
+    // Nothing returned around there: unknown, unless the direction points down (see
+    // setNoReturnRange()).
+    if (nearest == 0.0f && q.z() < 0.0f) nearest = static_cast<float>(no_return_range_);
+    if (nearest == 0.0f) continue;
     ++e.tested;
     const float margin = static_cast<float>(std::max(margin_, margin_per_metre_ * d));
     if (nearest > d + margin) ++e.seen_through;

@@ -25,15 +25,16 @@ struct Box {
 };
 
 /** One ray-cast scan: sensor at `ego` (x, y; 1.73 m above the road, yaw 0), rays every 0.2° in
- * azimuth and 0.4° in elevation (−24°…+2°, like an HDL-64E). Returns the points in the sensor frame
- * and, per point, the index of the box it hit (−1 = ground). */
+ * azimuth and 0.4° in elevation (−24°…+2°, like an HDL-64E), nothing returned beyond `max_range`.
+ * Returns the points in the sensor frame and, per point, the index of the box it hit (−1 = ground).
+ */
 struct Scan {
   Cloud::Ptr sensor_points{new Cloud};
   std::vector<int> hit_box;
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
 };
 
-Scan castScan(const Eigen::Vector2d& ego, const std::vector<Box>& boxes) {
+Scan castScan(const Eigen::Vector2d& ego, const std::vector<Box>& boxes, double max_range = 100) {
   Scan scan;
   const Eigen::Vector3d origin(ego.x(), ego.y(), 1.73);
   scan.pose.translation() = origin;
@@ -67,7 +68,7 @@ Scan castScan(const Eigen::Vector2d& ego, const std::vector<Box>& boxes) {
           hit = static_cast<int>(b);
         }
       }
-      if (best > 100) continue;  // no return
+      if (best > max_range) continue;  // no return
       const Eigen::Vector3d p = best * dir;
       scan.sensor_points->push_back(pcl::PointXYZ(float(p.x()), float(p.y()), float(p.z())));
       scan.hit_box.push_back(hit);
@@ -119,6 +120,37 @@ TEST(FreeSpaceMap, MoverInPreviouslySeenFreeSpaceIsSeenThrough) {
   EXPECT_GT(ahead.tested, 50);
   // The leading 3 m of the 4.5 m side were road seen through 5 frames ago.
   EXPECT_GT(ahead.fraction(), 0.3);
+}
+
+// A car approaching head-on from beyond an 80 m sensor range: 5 frames ago the rays through the
+// space it fills now returned nothing (neither it nor the ground was within range), so by
+// default that space is unknown; with setNoReturnRange(80) it was seen empty. Only below the
+// sensor: the no-returns of rays above it are sky, and a truck's roof there is not tested.
+TEST(FreeSpaceMap, NoReturnBelowTheSensorCountsAsSeenEmptyUpToTheNoReturnRange) {
+  std::vector<Scan> scans;
+  for (int f = 0; f <= 5; ++f) {
+    const std::vector<Box> scene{{{84.0 - 1.2 * f, 0}, 4.5, 1.8, 1.5},   // car, 12 m/s
+                                 {{86.0 - 1.2 * f, 8}, 7.0, 2.5, 3.2}};  // truck beside it
+    scans.push_back(castScan(Eigen::Vector2d::Zero(), scene, 80.0));
+  }
+  for (const double no_return : {0.0, 80.0}) {
+    pcl_movers::FreeSpaceMap map;
+    map.setHistory(6);
+    map.setNoReturnRange(no_return);
+    for (const auto& scan : scans) map.addScan(*scan.sensor_points, scan.pose);
+    const auto car = map.test(worldPointsOf(scans.back(), 0), 5);
+    std::vector<Eigen::Vector3f> roof;  // the truck's points above the sensor
+    for (const auto& q : worldPointsOf(scans.back(), 1))
+      if (q.z() > 1.73f) roof.push_back(q);
+    ASSERT_FALSE(roof.empty());
+    EXPECT_EQ(map.test(roof, 5).tested, 0) << "no-return range " << no_return;
+    if (no_return == 0) {
+      EXPECT_EQ(car.seen_through, 0);
+    } else {
+      EXPECT_GE(car.seen_through, 10);  // of the car's 21 points
+      EXPECT_GT(car.fraction(), 0.5);
+    }
+  }
 }
 
 TEST(FreeSpaceMap, RecedingMoverLeavesSpaceSeenThroughNow) {

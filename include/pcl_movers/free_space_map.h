@@ -51,6 +51,12 @@ class FreeSpaceMap {
   }
   double getMargin() const { return margin_; }
   double getMarginPerMetre() const { return margin_per_metre_; }
+  /** \brief A direction below the stored scan's sensor (z < 0 in its frame) whose whole window
+   * returned nothing counts as seen empty up to this range [m]; 0, the default: such a direction
+   * is unknown and not tested. See DetectorParameters::free_space_no_return for why only
+   * downward directions. */
+  void setNoReturnRange(double range) { no_return_range_ = range > 0 ? range : 0; }
+  double getNoReturnRange() const { return no_return_range_; }
   /** \brief Half-size of the cell window compared around a direction (rows, columns). */
   void setWindow(int rows, int cols) {
     win_rows_ = rows < 0 ? 0 : rows;
@@ -102,6 +108,7 @@ class FreeSpaceMap {
   float min_el_deg_ = -35.0f, max_el_deg_ = 25.0f;
   int rows_ = 300, cols_ = 1800;
   double margin_ = 0.3, margin_per_metre_ = 0.02;
+  double no_return_range_ = 0;
   int win_rows_ = 2, win_cols_ = 1;
   std::deque<Scan> scans_;
 };
