@@ -1138,3 +1138,36 @@ TEST(MoverTracker, SmallConfidentNearestMatchDoesNotStopTheSearch) {
   EXPECT_EQ(results[1].track_id, walker_id);
   EXPECT_NE(results[0].track_id, walker_id);
 }
+
+// A walker confirmed as a mover passes behind a parked car that hides all but its head and
+// shoulders: a cluster too low to register against the walker's model. The confirmed track
+// holds it (reports it as itself without an update) instead of losing it to a new track that,
+// too low to be a mover, would never be one (urban pedestrian 8: 6 frames lost this way).
+TEST(MoverTracker, ConfirmedWalkerHoldsItsHeadAndShouldersSeenAboveAParkedCar) {
+  Tracker tracker;
+  tracker.setParameters(defaults());
+  const Eigen::Vector3d sensor(0, 0, 1.7);
+  const double speed = 1.5;
+  int walker_id = -1;
+  for (int k = 0; k < 18; ++k) {
+    const double t = 0.1 * k;
+    SceneBuilder scene;
+    scene.addBox(sensor, Eigen::Vector2d(15, -4 + speed * t), 0.0, 0.5, 0.6, 1.8);
+    const bool hidden = k >= 15;  // from here only the top 0.3 m is seen
+    if (hidden) {
+      pcl::PointIndices top;
+      for (const int i : scene.clusters[0].indices)
+        if ((*scene.cloud)[i].z > 1.5f) top.indices.push_back(i);
+      scene.clusters.assign(1, top);
+    }
+    const auto results = step(tracker, scene, sensor, t);
+    ASSERT_EQ(results.size(), 1u);
+    if (!hidden) {
+      walker_id = results[0].track_id;
+      if (k == 14) ASSERT_TRUE(results[0].mover) << "the walker was not confirmed in 1.4 s";
+      continue;
+    }
+    EXPECT_EQ(results[0].track_id, walker_id) << "frame " << k;
+    EXPECT_TRUE(results[0].mover) << "frame " << k;
+  }
+}

@@ -876,7 +876,20 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
           !cand.features.large && cand.features.height >= 0.5 * p.min_mover_height;
       // A track with a model is only ever updated by registration: mixing centroid measurements
       // into its reference-point track would fake motion.
-      if (use_registration && track.model && !cand_registrable) continue;
+      if (use_registration && track.model && !cand_registrable) {
+        // But a confirmed mover may hold it (see "held" below): a walker passing behind a
+        // parked car shows only its head and shoulders, too low to register.
+        if (track.confirmed && !cand.features.large) {
+          const double d =
+              (cand.features.centroid.template head<2>() - predicted - track.centroid_offset)
+                  .norm();
+          if (d <= std::min(p.max_gate_radius, search) + p.gate_margin && d < held_distance[ti]) {
+            held_distance[ti] = d;
+            held_cluster[ti] = static_cast<int>(c);
+          }
+        }
+        continue;
+      }
       const bool centroid_only = !use_registration || track.large || !track.model;
       // Big structures: their centroid moves a lot as they come into view, gate generously.
       const double margin = centroid_only && (track.large || cand.features.large)
@@ -1163,10 +1176,10 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
   }
 
   // Held clusters: a confirmed mover whose only gated candidates registered with B below
-  // min_similarity is not updated (low B is not a measurement: no Kalman update, no model
-  // accumulation, the track coasts), but a cluster nobody else took near its prediction is
-  // reported as that track instead of starting a new one. Otherwise each such frame would be
-  // a missed mover plus a fresh unconfirmed track, and identities would churn.
+  // min_similarity (or were too low to register) is not updated (low B is not a measurement: no
+  // Kalman update, no model accumulation, the track coasts), but a cluster nobody else took near
+  // its prediction is reported as that track instead of starting a new one. Otherwise each such
+  // frame would be a missed mover plus a fresh unconfirmed track, and identities would churn.
   if (p.hold_confirmed) {
     for (std::size_t ti = 0; ti < tracks_.size(); ++ti) {
       const int c = held_cluster[ti];
