@@ -380,7 +380,7 @@ void DetectorParameters::forEachParameter(F&& f) {
   f("free_space_margin", free_space_margin, "seen-through range margin [m]");
   f("free_space_margin_per_metre", free_space_margin_per_metre, "margin per metre of distance");
   f("free_space_no_return", free_space_no_return,
-    "1 = no return below the horizon in an earlier scan = seen empty up to max_range");
+    "1 = no return below the sensor in an earlier scan = seen empty up to max_range");
   f("confirm_false_rate", confirm_false_rate,
     "early confirmation: F-test false-positive rate of velocity = 0 (0 = off)");
   f("confirm_sigma_floor", confirm_sigma_floor, "early confirmation: min position sigma [m]");
