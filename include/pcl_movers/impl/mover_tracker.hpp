@@ -874,19 +874,21 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
       // min_mover_height keeps its registered track.
       const bool cand_registrable =
           !cand.features.large && cand.features.height >= 0.5 * p.min_mover_height;
+      // Centroids are compared with the predicted centroid, not the predicted reference point:
+      // a car first seen head-on at 80 m has its reference point at its front, 1.5-2 m from the
+      // centroid of its side view when it passes (open scene: the track was lost and re-born).
+      const double distance =
+          (cand.features.centroid.template head<2>() - predicted - track.centroid_offset).norm();
       // A track with a model is only ever updated by registration: mixing centroid measurements
       // into its reference-point track would fake motion.
       if (use_registration && track.model && !cand_registrable) {
         // But a confirmed mover may hold it (see "held" below): a walker passing behind a
         // parked car shows only its head and shoulders, too low to register.
-        if (track.confirmed && !cand.features.large) {
-          const double d =
-              (cand.features.centroid.template head<2>() - predicted - track.centroid_offset)
-                  .norm();
-          if (d <= std::min(p.max_gate_radius, search) + p.gate_margin && d < held_distance[ti]) {
-            held_distance[ti] = d;
-            held_cluster[ti] = static_cast<int>(c);
-          }
+        if (track.confirmed && !cand.features.large &&
+            distance <= std::min(p.max_gate_radius, search) + p.gate_margin &&
+            distance < held_distance[ti]) {
+          held_distance[ti] = distance;
+          held_cluster[ti] = static_cast<int>(c);
         }
         continue;
       }
@@ -896,11 +898,6 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
                                 ? 0.5 * std::max(track.features.length, cand.features.length)
                                 : p.gate_margin;
       const double gate = std::min(p.max_gate_radius + margin, search + margin);
-      // Centroids are compared with the predicted centroid, not the predicted reference point:
-      // a car first seen head-on at 80 m has its reference point at its front, 1.5-2 m from the
-      // centroid of its side view when it passes (open scene: the track was lost and re-born).
-      const double distance =
-          (cand.features.centroid.template head<2>() - predicted - track.centroid_offset).norm();
       if (distance > gate) continue;
       if (std::abs(cand.features.centroid.z() - track.features.centroid.z()) > 1.5) continue;
       Match m;
