@@ -165,12 +165,18 @@ struct Result {
   std::size_t frames = 0, points = 0, unplaced_instance_points = 0, instance_points = 0;
   pcl_movers::eval::GroundScore ground, baseline;
   std::vector<pcl_movers::eval::GroundScore> ground_per_frame;
+  /// Ground scores by horizontal distance from the sensor (kRangeBands): far cells are deep and
+  /// hold few scan lines, so an overall score hides where the filter fails.
+  std::array<pcl_movers::eval::GroundScore, 5> ground_by_range;
   pcl_movers::eval::ObjectScore objects;
   std::map<std::uint16_t, std::size_t> false_ground;  ///< true class of points called ground
   /// Per instance class: scored, recovered, over-segmented, under-segmented (merged).
   std::map<std::uint16_t, std::array<std::size_t, 4>> by_class;
   double ground_ms = 0, organize_ms = 0, segment_ms = 0;
 };
+
+/// Upper edges of the range bands of Result::ground_by_range [m] (the last band is open).
+constexpr std::array<float, 4> kRangeBands = {20.f, 40.f, 60.f, 70.f};
 
 double msSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -245,6 +251,19 @@ void scoreFrame(const Frame& frame, const Options& opt, Result& result) {
   const auto frame_score = pcl_movers::eval::scoreGround(truth, is_ground);
   result.ground += frame_score;
   result.ground_per_frame.push_back(frame_score);
+  {
+    std::vector<pcl_movers::eval::GroundTruth> band_truth(n);
+    const Eigen::Vector3f origin = cloud->sensor_origin_.head<3>();
+    for (std::size_t b = 0; b < result.ground_by_range.size(); ++b) {
+      const float lo = b == 0 ? 0.f : kRangeBands[b - 1];
+      const float hi = b < kRangeBands.size() ? kRangeBands[b] : std::numeric_limits<float>::max();
+      for (std::size_t i = 0; i < n; ++i) {
+        const float r = ((*cloud)[i].getVector3fMap() - origin).head<2>().norm();
+        band_truth[i] = r >= lo && r < hi ? truth[i] : pcl_movers::eval::GroundTruth::kIgnore;
+      }
+      result.ground_by_range[b] += pcl_movers::eval::scoreGround(band_truth, is_ground);
+    }
+  }
   for (std::size_t i = 0; i < n; ++i)
     if (is_ground[i] && truth[i] == pcl_movers::eval::GroundTruth::kObject)
       ++result.false_ground[pcl_movers::io::labelClass(labels[i])];
@@ -406,6 +425,26 @@ int run(int argc, char** argv) {
     std::printf("| %s | %zu | %s | %s | %s | %s |\n", r.name.c_str(), r.frames,
                 pct(r.ground.precision()).c_str(), pct(r.ground.recall()).c_str(),
                 pct(r.baseline.precision()).c_str(), pct(r.baseline.recall()).c_str());
+  std::printf("\nGround precision / recall by horizontal distance from the sensor:\n\n| data |");
+  for (std::size_t b = 0; b <= kRangeBands.size(); ++b) {
+    if (b < kRangeBands.size())
+      std::printf(" %.0f-%.0f m |", b ? kRangeBands[b - 1] : 0.f, kRangeBands[b]);
+    else
+      std::printf(" >= %.0f m |", kRangeBands.back());
+  }
+  std::printf("\n|---|");
+  for (std::size_t b = 0; b <= kRangeBands.size(); ++b) std::printf("---|");
+  std::printf("\n");
+  for (const auto& r : results) {
+    std::printf("| %s |", r.name.c_str());
+    for (const auto& g : r.ground_by_range) {
+      if (g.tp + g.fp + g.fn == 0)
+        std::printf(" - |");  // no labelled ground and nothing called ground there
+      else
+        std::printf(" %s / %s |", pct(g.precision()).c_str(), pct(g.recall()).c_str());
+    }
+    std::printf("\n");
+  }
   if (opt.per_frame) {
     std::printf("\n| data | frame | ground precision | ground recall |\n|---|---|---|---|\n");
     for (const auto& r : results)

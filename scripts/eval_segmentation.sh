@@ -104,7 +104,8 @@ if [[ -f "$kitti/labels/000000.label" ]]; then
     # shellcheck disable=SC2086
     out=$("$eval_bin" --kitti "$kitti" $setting 2>/dev/null)
     g=$(echo "$out" | grep '^| kitti' | sed -n 1p | awk -F'|' '{print $4 "|" $5}')
-    o=$(echo "$out" | grep '^| kitti' | sed -n 2p | awk -F'|' '{print $4 "|" $5 "|" $6 "|" $7}')
+    o=$(echo "$out" | awk '/^\| data \| instances/{f=1; next} f && /^\| kitti/{print; exit}' |
+      awk -F'|' '{print $4 "|" $5 "|" $6 "|" $7}')
     echo "| \`$setting\` |$g|$o|"
   done
 fi

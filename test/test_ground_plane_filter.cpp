@@ -595,3 +595,117 @@ TEST(GroundPlaneFilter, KittiSemanticLabels) {
   EXPECT_GT(precision, 0.85);
   EXPECT_GT(recall, 0.95);
 }
+
+namespace {
+/** Scan lines of a spinning LiDAR (one per beam, `beams` in degrees below the horizon, samples
+ * every 0.18° of azimuth out to 80 m) on terrain z(x, y), which stays within `amplitude` of
+ * -kSensorHeight, with objects of height object(x, y) on it no nearer than `objects_from`. Truth:
+ * ground points at least `scored_from` away (horizontally) are scored as ground; object points more
+ * than 0.3 m up as not ground; the rest is not scored. */
+Scene castLines(const std::function<float(float, float)>& z_of,
+                const std::function<float(float, float)>& object, float objects_from,
+                float amplitude, const std::vector<float>& beams, float scored_from,
+                unsigned seed) {
+  Scene scene;
+  std::mt19937 rng(seed);
+  std::normal_distribution<float> noise(0.f, 0.02f);
+  for (const float beam : beams) {
+    const float el = -beam * float(M_PI) / 180.f;
+    const float s = std::sin(-el);
+    // The beam is above the terrain before t_lo (objects stand beyond `objects_from`) and below
+    // it after t_hi.
+    const float t_lo = std::max(1.f, std::min((kSensorHeight - amplitude) / s, objects_from));
+    const float t_hi = std::min(85.f, (kSensorHeight + amplitude) / s);
+    for (float az = -180.f; az < 180.f; az += 0.18f) {
+      const float a = az * float(M_PI) / 180.f;
+      const Eigen::Vector3f d(std::cos(el) * std::cos(a), std::cos(el) * std::sin(a), -s);
+      auto below = [&](float t) {
+        const Eigen::Vector3f q = t * d;
+        return q.z() < z_of(q.x(), q.y()) + object(q.x(), q.y());
+      };
+      float t0 = t_lo, t1 = -1.f;
+      for (float t = t_lo; t <= t_hi; t += 0.1f) {
+        if (below(t)) {
+          t1 = t;
+          break;
+        }
+        t0 = t;
+      }
+      if (t1 < 0.f) continue;
+      for (int k = 0; k < 8; ++k) {
+        const float tm = 0.5f * (t0 + t1);
+        (below(tm) ? t1 : t0) = tm;
+      }
+      const Eigen::Vector3f hit = t1 * d;
+      const Eigen::Vector3f p = (t1 + noise(rng)) * d;
+      const float r = std::hypot(p.x(), p.y());
+      if (r > 80.f) continue;
+      const float up = hit.z() - z_of(hit.x(), hit.y());
+      int truth = -1;
+      if (object(hit.x(), hit.y()) > 0.f)
+        truth = up > 0.3f ? 0 : -1;
+      else if (r >= scored_from)
+        truth = 1;
+      scene.add(p.x(), p.y(), p.z(), truth);
+    }
+  }
+  return scene;
+}
+}  // namespace
+
+TEST(GroundPlaneFilter, CurvedFarCellsKeepAPlaneThatLoweringWouldRaise) {
+  // Rolling terrain (hills 50 m apart) seen by HDL-64E-like beams, with cars at 70-79 m all
+  // around: the cells beyond 57 m are 11-14 m deep and hold two or three scan lines. A plane
+  // leaving points below it is refitted to those points, and on curved ground that refit often
+  // rises elsewhere; keeping the earlier plane there (getCurvedCellDepth()) must find more of
+  // the far ground, and call no more of the cars ground, than refitting in every cell.
+  std::vector<float> beams;
+  for (float b = 24.9f; b > 1.2f; b -= (b > 8.f ? 0.5f : 0.35f)) beams.push_back(b);
+  struct Car {
+    float x, y, c, s;  // centre, heading cosine and sine
+  };
+  std::vector<Car> parked;
+  for (int k = 0; k < 24; ++k) {
+    const float a = float(k) * 15.f * float(M_PI) / 180.f, r = 70.f + float(k % 4) * 3.f;
+    parked.push_back({r * std::cos(a), r * std::sin(a), std::cos(a + 1.2f), std::sin(a + 1.2f)});
+  }
+  auto cars = [&parked](float x, float y) {
+    if (x * x + y * y < 66.f * 66.f) return 0.f;
+    for (const Car& car : parked) {
+      const float u = (x - car.x) * car.c + (y - car.y) * car.s;
+      const float v = -(x - car.x) * car.s + (y - car.y) * car.c;
+      if (std::abs(u) < 2.2f && std::abs(v) < 0.9f) return 1.5f;
+    }
+    return 0.f;
+  };
+  int improved = 0, worse = 0, scenes = 0;
+  double precision_change = 0;
+  for (const float amplitude : {0.3f, 0.6f, 0.9f})
+    for (const float phase : {0.f, 1.f, 2.f, 3.f, 4.f, 5.f}) {
+      auto z_of = [amplitude, phase](float x, float y) {
+        return -kSensorHeight + amplitude * std::sin(2.f * float(M_PI) * x / 50.f + phase) *
+                                    std::cos(2.f * float(M_PI) * y / 50.f);
+      };
+      const Scene scene = castLines(z_of, cars, 66.f, amplitude, beams, 57.f, 5);
+      Score with_rule, without;
+      for (const bool rule : {true, false}) {
+        GroundPlaneFilter<pcl::PointXYZ> filter;  // the detector's thresholds
+        filter.setInputCloud(scene.cloud);
+        filter.setNegative(true);
+        filter.setDistanceThreshold(0.25f);
+        filter.setMaxTilt(15.f * float(M_PI) / 180.f);
+        if (!rule) filter.setCurvedCellDepth(std::numeric_limits<float>::infinity());
+        pcl::Indices ground;
+        filter.filter(ground);
+        (rule ? with_rule : without) = score(scene, ground);
+      }
+      improved += with_rule.recall > without.recall + 0.005;
+      worse += with_rule.recall < without.recall - 0.005;
+      precision_change += with_rule.precision - without.precision;
+      ++scenes;
+    }
+  // In most scenes no far cell meets the case; where one does, the far ground found grows.
+  EXPECT_GE(improved, 3) << "of " << scenes << " scenes";
+  EXPECT_EQ(worse, 0);
+  EXPECT_GT(precision_change / scenes, -0.002);
+}

@@ -132,6 +132,14 @@ class GroundPlaneFilter : public pcl::FilterIndices<PointT> {
   void setRingEdges(const std::vector<float>& edges) { ring_edges_ = edges; }
   const std::vector<float>& getRingEdges() const { return ring_edges_; }
 
+  /** \brief Radial depth [m] from which a cell's ground may curve within it (default 10, the
+   * cells beyond 57 m with the default rings). In such a cell a plane that leaves points below it
+   * is only replaced by the plane through those points when that one leaves fewer of the cell's
+   * points below it: on rolling terrain the points below a far cell's plane are the low stretches
+   * of its two or three scan lines, not the ground beneath an object's horizontal slice, and a
+   * plane through them alone rises elsewhere. Infinity = every cell as a near one. */
+  void setCurvedCellDepth(float depth) { curved_cell_depth_ = depth; }
+  float getCurvedCellDepth() const { return curved_cell_depth_; }
   /** \brief Fewest points for a cell to get its own plane (default 12); sparser cells inherit. */
   void setMinPointsPerCell(int n) { min_points_per_cell_ = n; }
   int getMinPointsPerCell() const { return min_points_per_cell_; }
@@ -184,6 +192,8 @@ class GroundPlaneFilter : public pcl::FilterIndices<PointT> {
 
   /** \brief Ring of a horizontal distance r (binary search over ring_edges_). */
   int ringOf(float r) const;
+  /** \brief Radial size of a ring [m] (the open outermost one: as deep as the ring inside it). */
+  float cellDepth(int ring) const;
 
   float distance_threshold_ = 0.1f;
   float fit_threshold_ = 0.1f;
@@ -194,6 +204,7 @@ class GroundPlaneFilter : public pcl::FilterIndices<PointT> {
   int num_sectors_ = 32;
   std::vector<float> ring_edges_{0.f,   6.f,  8.f,  10.f, 12.5f, 15.f, 18.f, 21.5f,
                                  25.5f, 30.f, 35.f, 41.f, 48.f,  57.f, 68.f, 82.f};
+  float curved_cell_depth_ = 10.f;
   int min_points_per_cell_ = 12;
   int max_samples_ = 64;
   int max_iterations_ = 40;
@@ -210,6 +221,7 @@ class GroundPlaneFilter : public pcl::FilterIndices<PointT> {
   std::vector<float> height_;  ///< per point of the input: height above its plane, NaN if unused
   std::vector<std::uint8_t> steep_;  ///< per point: the local-slope test flagged it
   std::vector<int> positions_;       ///< candidates of the current cell (into cell_xyz_)
+  std::vector<int> candidates_;      ///< the same before the floating-plane test trims them
   std::vector<float> sample_x_, sample_y_, sample_z_;  ///< RANSAC subsample, flat per axis
 };
 

@@ -52,6 +52,15 @@ int GroundPlaneFilter<PointT>::ringOf(float r) const {
 }
 
 template <typename PointT>
+float GroundPlaneFilter<PointT>::cellDepth(int ring) const {
+  // The outermost ring is open-ended: count it as deep as the one inside it.
+  const int rings = static_cast<int>(ring_edges_.size());
+  if (ring + 1 < rings) return ring_edges_[ring + 1] - ring_edges_[ring];
+  return ring > 0 ? ring_edges_[ring] - ring_edges_[ring - 1]
+                  : std::numeric_limits<float>::infinity();
+}
+
+template <typename PointT>
 bool GroundPlaneFilter<PointT>::fitPlane(const std::vector<int>& positions, const Plane& prior,
                                          float band, const Eigen::Vector2f& centre,
                                          std::uint32_t seed, Plane& fitted) {
@@ -181,11 +190,12 @@ void GroundPlaneFilter<PointT>::applyFilter(pcl::Indices& indices) {
     edges_ok = edges_ok && ring_edges_[i] > ring_edges_[i - 1];
   if (!edges_ok || num_sectors_ < 1 || !(distance_threshold_ > 0.f) || !(fit_threshold_ > 0.f) ||
       !(max_tilt_ >= 0.f) || max_samples_ < 3 || max_iterations_ < 1 ||
-      !(max_local_slope_ >= 0.f) || !(range_noise_ >= 0.f) || !(local_slope_band_ >= 0.f)) {
+      !(max_local_slope_ >= 0.f) || !(range_noise_ >= 0.f) || !(local_slope_band_ >= 0.f) ||
+      !(curved_cell_depth_ >= 0.f)) {
     PCL_ERROR(
         "[pcl_movers::%s::applyFilter] Invalid parameters (ring edges must start at 0 and "
         "increase; sectors, thresholds, samples and iterations must be positive; local-slope "
-        "parameters must be >= 0).\n",
+        "parameters and the curved-cell depth must be >= 0).\n",
         filter_name_.c_str());
     // Nothing was classified: report every point as removed so callers do not mistake an
     // error for "no ground".
@@ -294,20 +304,43 @@ void GroundPlaneFilter<PointT>::applyFilter(pcl::Indices& indices) {
       positions.resize(kept_near);
       if (static_cast<int>(positions.size()) < min_points_per_cell_) continue;
       const Eigen::Vector2f c2 = origin.head<2>() + centre_r * sector_dirs[s];
-      Plane fitted;
+      Plane fitted, floating;
       bool ok = false;
       // A plane floating above real ground (the horizontal slice through a car's body, a bonnet,
       // a hedge top) leaves points clearly below it: drop it and everything above, fit again.
+      // In a deep cell (getCurvedCellDepth()) the lower fit must also leave fewer of the cell's
+      // candidates below it than the plane it replaces, or it is no lower and the earlier plane
+      // is kept: there the points below a plane are often the lowest stretches of its two or
+      // three scan lines on curved ground (rolling terrain, a crest, the vehicle pitching), and
+      // a plane through them alone tilts or rises elsewhere (simulated open scene, a 68-82 m
+      // cell: 132 of its 169 candidates were then left 0.5-1.3 m below the plane).
+      const bool deep = cellDepth(ring) >= curved_cell_depth_;
+      if (deep) candidates_.assign(positions.begin(), positions.end());
+      auto belowCandidates = [&](const Plane& plane) {
+        std::size_t below = 0;
+        for (const auto j : candidates_)
+          below += plane.height(cell_xyz_[j]) < -2.f * fit_threshold_;
+        return below;
+      };
+      std::size_t floating_below = 0;
       for (int attempt = 0; attempt < 3; ++attempt) {
         if (static_cast<int>(positions.size()) < min_points_per_cell_) break;
         const auto seed = static_cast<std::uint32_t>(cell * 4 + attempt);
         if (!fitPlane(positions, prior, band, c2, seed, fitted)) break;
+        const std::size_t all_below = deep ? belowCandidates(fitted) : 0;
+        if (deep && attempt > 0 && all_below >= floating_below) {
+          fitted = floating;
+          ok = true;
+          break;
+        }
         std::size_t below = 0;
         for (const auto j : positions) below += fitted.height(cell_xyz_[j]) < -2.f * fit_threshold_;
         if (below < std::max<std::size_t>(min_points_per_cell_ / 2, positions.size() / 20)) {
           ok = true;
           break;
         }
+        floating = fitted;
+        floating_below = all_below;
         std::size_t kept = 0;
         for (std::size_t m = 0; m < positions.size(); ++m)
           if (fitted.height(cell_xyz_[positions[m]]) < -fit_threshold_)
