@@ -293,6 +293,33 @@ TEST(FreeSpaceMap, FarWalkerApproachingIsConfirmedThroughTheLongLag) {
   }
 }
 
+TEST(FreeSpaceMap, FastMoverSeenFromTheFirstFrameIsConfirmedBeforeTheLagHasPassed) {
+  // A car driving straight at the (parked) ego from 30 m at 8 m/s, from the sequence's first
+  // frame: it fills space the earlier scans saw empty, and its old surface lies behind it (no
+  // "left space" evidence). Before free_space_lag (5) earlier scans exist, the oldest stored one
+  // is tested, so it is confirmed within the first free_space_lag frames; a parked car at the
+  // same place never is.
+  for (const double speed : {8.0, 0.0}) {
+    auto scene = [speed](int f, Eigen::Vector2d& ego) {
+      ego = Eigen::Vector2d(0, 0);
+      return std::vector<Box>{{{30 - speed * 0.1 * f, 0}, 4.5, 1.8, 1.5}};
+    };
+    auto all = [](int, const Eigen::Vector3f&) { return true; };
+    pcl_movers::DetectorParameters params;
+    const auto mover = runTracker(params, true, 12, scene, all);
+    int first = -1;
+    for (std::size_t f = 0; f < mover.size(); ++f)
+      if (mover[f] && first < 0) first = static_cast<int>(f);
+    SCOPED_TRACE("speed " + std::to_string(speed));
+    if (speed > 0) {
+      EXPECT_GE(first, 0);
+      EXPECT_LT(first, params.free_space_lag);
+    } else {
+      EXPECT_EQ(first, -1);
+    }
+  }
+}
+
 TEST(FreeSpaceMap, FastAtan2IsAccurateToAThousandthOfADegree) {
   double worst = 0;
   for (int i = 0; i < 3600; ++i) {

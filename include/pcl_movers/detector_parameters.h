@@ -182,7 +182,8 @@ struct DetectorParameters {
   double displacement_ratio = 0.6;
   /// Free-space test (FreeSpaceMap): a mover must occupy space the scan free_space_lag frames ago
   /// saw through, or have left space the current scan sees through (0 = test off). 5 frames at
-  /// 10 Hz: a target at mover_speed has moved 0.6 m, twice the near margin.
+  /// 10 Hz: a target at mover_speed has moved 0.6 m, twice the near margin. In a sequence's first
+  /// frames, before that many earlier scans exist, the oldest one is tested.
   int free_space_lag = 5;
   /// A second, longer lag tried when the free_space_lag test fails (0 = off): a slow mover
   /// approaching far away (a pedestrian walking towards the sensor at 50 m) moves less in

@@ -477,8 +477,14 @@ bool MoverTracker<PointT>::freeSpaceEvidence(Track& track,
   const auto& p = parameters_;
   track.free_space = 0;
   if (!free_space_map_ || p.free_space_lag <= 0) return true;  // test disabled
-  // (a) approaching / crossing: the object now fills space an earlier scan saw empty.
-  auto ahead = free_space_map_->test(points, p.free_space_lag);
+  // (a) approaching / crossing: the object now fills space an earlier scan saw empty. In the
+  // first frames of a sequence fewer than free_space_lag earlier scans exist, and the oldest one
+  // is used: a static object gives no evidence at any lag, and a mover that has moved less than
+  // the margin since gives none either, so only clearly moving objects are confirmed before the
+  // lag has passed (open truck, seen from frame 0: confirmed at frame 5 before, when the first
+  // lag-5 scan exists).
+  const int lag = std::min(p.free_space_lag, free_space_map_->size() - 1);
+  auto ahead = lag >= 1 ? free_space_map_->test(points, lag) : FreeSpaceMap::Evidence();
   // (b) receding: the object's earlier surface is now seen through by the current scan.
   FreeSpaceMap::Evidence behind;
   // The oldest stored view is used once and dropped: each vote tests a different earlier view,
