@@ -1171,3 +1171,92 @@ TEST(MoverTracker, ConfirmedWalkerHoldsItsHeadAndShouldersSeenAboveAParkedCar) {
     EXPECT_TRUE(results[0].mover) << "frame " << k;
   }
 }
+
+namespace {
+/** Keeps the points of cluster `c` above `z_min` only (what shows above a nearer object). */
+void keepAbove(SceneBuilder& scene, std::size_t c, float z_min) {
+  pcl::PointIndices top;
+  for (const int i : scene.clusters[c].indices)
+    if ((*scene.cloud)[i].z > z_min) top.indices.push_back(i);
+  scene.clusters[c] = top;
+}
+}  // namespace
+
+// A walker seen only above a parked car: its 0.3 m head-and-shoulders cluster is under
+// min_mover_height, but the car hides its lower part (the detector passes the car's lowest point
+// as the cluster's floor), so it is measured down to there and becomes a mover. Without the floor,
+// or with standing_height_from_occluder off, it never does.
+TEST(MoverTracker, WalkerSeenOnlyAboveAParkedCarIsAMoverThroughTheCarsFloor) {
+  const Eigen::Vector3d sensor(0, 0, 1.7);
+  for (const int variant : {0, 1, 2}) {  // floor given; no floor; rule off
+    auto params = defaults();
+    if (variant == 2) params.standing_height_from_occluder = 0;
+    Tracker tracker;
+    tracker.setParameters(params);
+    int movers = 0;
+    for (int k = 0; k < 30; ++k) {
+      const double t = 0.1 * k;
+      SceneBuilder scene;
+      scene.addBox(sensor, Eigen::Vector2d(15, -4 + 1.5 * t), 0.0, 0.5, 0.6, 1.8);
+      keepAbove(scene, 0, 1.5f);
+      const std::vector<double> floors =
+          variant == 1 ? std::vector<double>{} : std::vector<double>{0.1};
+      tracker.update(scene.cloud, scene.clusters, sensor, t, {}, floors);
+      movers += tracker.getClusterResults()[0].mover;
+    }
+    SCOPED_TRACE("variant " + std::to_string(variant));
+    if (variant == 0)
+      EXPECT_GE(movers, 10);
+    else
+      EXPECT_EQ(movers, 0);
+  }
+}
+
+// The upper part of a moving car cut off from its nearer lower body (a separate cluster, hidden
+// from below by the car itself) moves with the car, but it is the car's, not a second mover.
+TEST(MoverTracker, HiddenFromBelowBesideAMoverIsNotASecondMover) {
+  Tracker tracker;
+  tracker.setParameters(defaults());
+  const Eigen::Vector3d sensor(0, 0, 1.7);
+  int car_movers = 0, part_movers = 0;
+  for (int k = 0; k < 30; ++k) {
+    const double t = 0.1 * k;
+    SceneBuilder scene;
+    const Eigen::Vector2d car(-10 + 8 * t, 12);
+    scene.addBox(sensor, car, 0.0, 4.5, 1.8, 1.3);
+    scene.addBox(sensor, car + Eigen::Vector2d(0.3, 0), 0.0, 1.5, 1.2, 1.8);  // the cabin
+    keepAbove(scene, 1, 1.4f);
+    tracker.update(scene.cloud, scene.clusters, sensor, t, {},
+                   {std::numeric_limits<double>::quiet_NaN(), 0.05});
+    const auto& results = tracker.getClusterResults();
+    car_movers += results[0].mover;
+    part_movers += results[1].mover;
+  }
+  EXPECT_GE(car_movers, 15);
+  EXPECT_EQ(part_movers, 0);
+}
+
+// A mover confirmed from views hidden from below keeps its velocity when it emerges and is first
+// registered (its model starts then), instead of being reported standing still.
+TEST(MoverTracker, WalkerEmergingFromBehindAParkedCarKeepsItsVelocity) {
+  Tracker tracker;
+  tracker.setParameters(defaults());
+  const Eigen::Vector3d sensor(0, 0, 1.7);
+  bool confirmed_hidden = false;
+  for (int k = 0; k < 26; ++k) {
+    const double t = 0.1 * k;
+    SceneBuilder scene;
+    scene.addBox(sensor, Eigen::Vector2d(15, -4 + 1.5 * t), 0.0, 0.5, 0.6, 1.8);
+    const bool hidden = k < 20;
+    if (hidden) keepAbove(scene, 0, 1.5f);
+    tracker.update(scene.cloud, scene.clusters, sensor, t, {},
+                   {hidden ? 0.1 : std::numeric_limits<double>::quiet_NaN()});
+    const auto& r = tracker.getClusterResults()[0];
+    if (hidden && k == 19) confirmed_hidden = r.mover;
+    if (!hidden) {
+      EXPECT_TRUE(r.mover) << "frame " << k;
+      EXPECT_GT(r.velocity.norm(), 1.0) << "frame " << k;
+    }
+  }
+  EXPECT_TRUE(confirmed_hidden);
+}

@@ -457,3 +457,50 @@ TEST(RangeImageRegionGrowing, OccludedSidesFlagTheSideBoundedByANearerObject) {
     EXPECT_EQ(sides[0], 0);
   }
 }
+
+// A walker's head and shoulders seen over a parked car: hidden from below by the nearer car, so
+// its floor is the car's lowest point. The car (nothing below it) and a box in front of a farther
+// wall (what is below it is farther) have none.
+TEST(RangeImageRegionGrowing, OccluderFloorsFindTheLowestPointOfTheNearerObjectBelow) {
+  // The car seen from the side: a thin slab, so that its roof gives no returns of its own.
+  const std::vector<Box> boxes{Box{{10.f, -1.f, -1.5f}, {10.2f, 1.f, -0.3f}},      // parked car
+                               Box{{14.f, -0.25f, -0.45f}, {14.5f, 0.25f, 0.1f}},  // head
+                               Box{{-15.f, 3.f, -0.2f}, {-13.f, 6.f, 0.5f}},       // box
+                               Box{{-30.f, -2.f, -3.f}, {-29.f, 12.f, 3.f}}};      // wall
+  const Cloud::Ptr cloud = rayCast(boxes);
+  const auto clusters = segment(cloud);  // the box cuts the wall in two
+  ASSERT_GE(clusters.size(), 4u);
+  pcl::Indices objects;
+  for (std::size_t i = 0; i < cloud->size(); ++i)
+    if (std::isfinite((*cloud)[i].x)) objects.push_back(static_cast<int>(i));
+  std::vector<int> floors;
+  RangeImageRegionGrowing<pcl::PointXYZ>::occluderFloors(*cloud, objects, clusters, 0.05f, 0.1f, 2,
+                                                         0.5f, floors);
+  ASSERT_EQ(floors.size(), clusters.size());
+  int heads = 0;
+  float car_low = std::numeric_limits<float>::infinity();
+  for (const auto& c : clusters)
+    if ((*cloud)[c.indices.front()].x > 9.f && (*cloud)[c.indices.front()].x < 10.5f)
+      for (const auto i : c.indices) car_low = std::min(car_low, (*cloud)[i].z);
+  for (std::size_t c = 0; c < clusters.size(); ++c) {
+    const auto& p = (*cloud)[clusters[c].indices.front()];
+    if (p.x > 13.f) {  // the head
+      ++heads;
+      ASSERT_GE(floors[c], 0);
+      EXPECT_FLOAT_EQ((*cloud)[floors[c]].z, car_low);
+      EXPECT_LT(car_low, -1.3f);
+    } else {
+      EXPECT_EQ(floors[c], -1) << "cluster at x " << p.x;
+    }
+  }
+  EXPECT_EQ(heads, 1);
+  // The car taken for ground (not among the objects, no cluster): nothing hides the head.
+  for (const auto& c : clusters) {
+    if (!((*cloud)[c.indices.front()].x > 13.f)) continue;
+    const std::vector<pcl::PointIndices> head{c};
+    RangeImageRegionGrowing<pcl::PointXYZ>::occluderFloors(*cloud, c.indices, head, 0.05f, 0.1f, 2,
+                                                           0.5f, floors);
+    ASSERT_EQ(floors.size(), 1u);
+    EXPECT_EQ(floors[0], -1);
+  }
+}

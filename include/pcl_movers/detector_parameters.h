@@ -244,6 +244,11 @@ struct DetectorParameters {
   /// 1 = a confirmed mover whose gated candidate failed registration (low B) keeps that cluster
   /// as its output row without an update, instead of the cluster starting a new track.
   int hold_confirmed = 1;
+  /// 1 = a cluster whose lower part a nearer object hides (RangeImageRegionGrowing::
+  /// occluderFloors(): at least half its bottom cells have a nearer object right below) counts,
+  /// for the min_mover_height test, as reaching down to that object's lowest point: a walker seen
+  /// only above a parked car shows a 0.3 m head and shoulders; 0 = its visible extent.
+  int standing_height_from_occluder = 1;
   /// Occlusion-aware measurements (0 = off): a cluster side (range image columns) counts as
   /// occluded when at least this fraction of its boundary cells is bounded by a nearer object
   /// point (RangeImageRegionGrowing::occludedSides()). The extent there is not the object's and
@@ -389,6 +394,9 @@ void DetectorParameters::forEachParameter(F&& f) {
   f("confirm_min_points", confirm_min_points, "early confirmation: min points of the cluster");
   f("confirm_free_space_votes", confirm_free_space_votes,
     "early confirmation: passed free-space tests needed");
+  f("standing_height_from_occluder", standing_height_from_occluder,
+    "1 = a cluster hidden from below by a nearer object is measured down to it for "
+    "min_mover_height");
   f("mover_latch", mover_latch, "1 = a confirmed mover stays a mover while tracked");
   f("hold_confirmed", hold_confirmed, "1 = confirmed movers keep low-B clusters (no update)");
   f("occluded_fraction", occluded_fraction,
@@ -565,6 +573,8 @@ inline void DetectorParameters::validate() const {
     throw InputError("parameter velocity_fit_init must be 0 or 1");
   if (fast_from_fit != 0 && fast_from_fit != 1)
     throw InputError("parameter fast_from_fit must be 0 or 1");
+  if (standing_height_from_occluder != 0 && standing_height_from_occluder != 1)
+    throw InputError("parameter standing_height_from_occluder must be 0 or 1");
   if (mover_latch != 0 && mover_latch != 1)
     throw InputError("parameter mover_latch must be 0 or 1");
   if (free_space_no_return != 0 && free_space_no_return != 1)

@@ -165,6 +165,8 @@ class MoverDetector {
   MoverTracker<PointT> tracker_;
   FreeSpaceMap free_space_;             ///< recent scans for the tracker's free-space test
   std::vector<std::uint8_t> occluded_;  ///< occluded sides of each cluster (last frame)
+  std::vector<int> floors_;      ///< per cluster: lowest point of a nearer object below, or -1
+  std::vector<double> floor_z_;  ///< the same as world z (NaN: none), for the tracker
   StageObject<RangeImageOrganizer<PointT>> organizer_;
   StageObject<GroundPlaneFilter<PointT>> ground_;
   StageObject<RangeImageRegionGrowing<PointT>> segmenter_;

@@ -107,6 +107,9 @@ class MoverTracker {
     /// A side of the cluster is bounded by a nearer object (see update()): its extent there is
     /// not the object's, and its measured position can slide while it emerges or hides.
     bool occluded = false;
+    /// Lowest point (world z) of a nearer object hiding the cluster's lower part (a parked car
+    /// below a walker's head), NaN when nothing hides it from below (see update()).
+    double floor_z = std::numeric_limits<double>::quiet_NaN();
   };
 
   /** \brief One track. Positions and velocities are in the world frame. */
@@ -148,6 +151,8 @@ class MoverTracker {
     /// Tallest (not large) view of the object so far [m]: the height test of the mover decision
     /// uses it, as a van seen from straight behind can show a lower cluster than its height.
     double max_height = 0;
+    /// The same with views hidden from below measured down to what hides them (standingHeight()).
+    double max_standing_height = 0;
     /// Longest (not large) view of the object so far [m]: how far from the last visible part
     /// another part of it can reappear (see reacquire_velocity).
     double max_length = 0;
@@ -223,10 +228,14 @@ class MoverTracker {
    * \param occluded per cluster, whether a side of it is bounded by a nearer object
    * (RangeImageRegionGrowing::occludedSides(), non-zero = occluded; the kSplitPart bit = a part
    * of a merged cluster split by splitMergedClusters(), also tracked below min_cluster_points,
-   * down to kMinSplitPoints); empty = unknown (none) */
+   * down to kMinSplitPoints); empty = unknown (none)
+   * \param floor_z per cluster, the world z of the lowest point of a nearer object hiding its
+   * lower part (RangeImageRegionGrowing::occluderFloors()), NaN where none; empty = none. With
+   * standing_height_from_occluder the mover height test measures such a cluster down to there. */
   void update(const PointCloudConstPtr& cloud, const std::vector<pcl::PointIndices>& clusters,
               const Eigen::Vector3d& sensor_origin, double time,
-              const std::vector<std::uint8_t>& occluded = {});
+              const std::vector<std::uint8_t>& occluded = {},
+              const std::vector<double>& floor_z = {});
 
   /** \brief Splits the clusters that hold the predicted objects of two or more established tracks
    * moving differently (two walkers passing each other, a cyclist beside a parked car): region
@@ -382,6 +391,12 @@ class MoverTracker {
 
   /** \brief Updates the mover flag of a track after an update; `points` are the world points of
    * the cluster just assigned (for the free-space test). */
+  /** \brief Height of a cluster for the mover height test: down to the lowest point of a nearer
+   * object hiding its lower part (standing_height_from_occluder), else its own extent. */
+  /** \brief Whether a moving track other than `track` (a mover, confirmed, or faster than
+   * mover_speed) lies within half its longest view plus gate_margin of `track`'s position. */
+  bool besideMover(const Track& track) const;
+  double standingHeight(const ClusterFeatures& features) const;
   void decideMover(Track& track, const std::vector<Eigen::Vector3f>& points) const;
 
   /** \brief True when the track's motion is well determined enough for an early confirmation

@@ -132,6 +132,19 @@ class RangeImageRegionGrowing : public pcl::PCLBase<PointT> {
                             int max_gap, bool wrap_around, float min_fraction,
                             std::vector<std::uint8_t>& sides);
 
+  /** \brief For each cluster hidden from below by a nearer object (a walker's head and shoulders
+   * seen above a parked car), the index of the lowest point of that object, else -1.
+   *
+   * A cluster's bottom cells are its lowest cell in each of its columns. Below one, the first
+   * valid cell down the column (skipping up to `max_gap` empty cells) hides the cluster's lower
+   * part when it is an object point (in `objects`) nearer by more than max(k · range, d_min), as
+   * occludedSides() tests along rows. When at least `min_fraction` of the bottom cells are hidden
+   * so, the cluster's floor is the lowest point (smallest z) of the objects hiding it: of their
+   * whole clusters where they belong to one, else of the hiding cells themselves. */
+  static void occluderFloors(const PointCloud& organized, const pcl::Indices& objects,
+                             const std::vector<pcl::PointIndices>& clusters, float k, float d_min,
+                             int max_gap, float min_fraction, std::vector<int>& floors);
+
  protected:
   /** \brief Root of the set holding i, with path halving. */
   int findRoot(int i);

@@ -208,6 +208,18 @@ void MoverDetector<PointT>::process(const PointCloudConstPtr& scan, const Eigen:
         occluded_);
   else
     occluded_.clear();
+  // Clusters hidden from below by a nearer object: the world z of that object's lowest point.
+  floor_z_.clear();
+  if (p.standing_height_from_occluder) {
+    RangeImageRegionGrowing<PointT>::occluderFloors(
+        *organized, *objects, clusters, static_cast<float>(p.depth_ratio),
+        static_cast<float>(p.depth_min), p.max_gap, 0.5f, floors_);
+    floor_z_.assign(clusters.size(), std::numeric_limits<double>::quiet_NaN());
+    for (std::size_t c = 0; c < clusters.size(); ++c)
+      if (floors_[c] >= 0)
+        floor_z_[c] =
+            (pose * (*organized)[floors_[c]].getVector3fMap().template cast<double>()).z();
+  }
   // Clusters holding objects of two tracks that move differently are split between them; the
   // sensor-frame clusters (outputs) and occlusion flags follow the same split.
   const auto parts = tracker_.splitMergedClusters(*world, world_clusters, time);
@@ -215,10 +227,16 @@ void MoverDetector<PointT>::process(const PointCloudConstPtr& scan, const Eigen:
     // A split part's side along the cut is not the object's extent: occluded (kSplitPart, see
     // MoverTracker::update()).
     occluded_ = MoverTracker<PointT>::partFlags(parts, clusters, occluded_);
+    if (!floor_z_.empty()) {
+      std::vector<double> part_floor(parts.size());
+      for (std::size_t k = 0; k < parts.size(); ++k)
+        part_floor[k] = floor_z_[static_cast<std::size_t>(parts[k].cluster)];
+      floor_z_.swap(part_floor);
+    }
     world_clusters = MoverTracker<PointT>::applyParts(parts, world_clusters);
     clusters = MoverTracker<PointT>::applyParts(parts, clusters);
   }
-  tracker_.update(world, world_clusters, pose.translation(), time, occluded_);
+  tracker_.update(world, world_clusters, pose.translation(), time, occluded_, floor_z_);
   const auto t5 = Clock::now();
 
   // Outputs: rows, indices and labels.

@@ -675,6 +675,28 @@ std::vector<pcl::PointIndices> MoverTracker<PointT>::applyParts(
 }
 
 template <typename PointT>
+double MoverTracker<PointT>::standingHeight(const ClusterFeatures& f) const {
+  // A cluster whose lower part a nearer object hides (a walker's head above a parked car) may
+  // reach down to that object's lowest point: measured from there for the mover height test.
+  if (!parameters_.standing_height_from_occluder || !std::isfinite(f.floor_z)) return f.height;
+  return std::max(f.height, f.max_z - std::min(f.min_z, f.floor_z));
+}
+
+template <typename PointT>
+bool MoverTracker<PointT>::besideMover(const Track& track) const {
+  const Eigen::Vector2d at = track.filter.position();
+  for (const Track& u : tracks_) {
+    // Moving, confirmed or not yet: the two are decided in the same update, in either order.
+    const bool moving =
+        u.mover || u.confirmed || u.filter.velocity().norm() > parameters_.mover_speed;
+    if (u.id == track.id || u.large || !moving) continue;
+    if ((u.filter.position() - at).norm() < 0.5 * u.max_length + parameters_.gate_margin)
+      return true;
+  }
+  return false;
+}
+
+template <typename PointT>
 std::vector<std::uint8_t> MoverTracker<PointT>::partFlags(
     const std::vector<ClusterPart>& parts, const std::vector<pcl::PointIndices>& clusters,
     const std::vector<std::uint8_t>& occluded) {
@@ -727,7 +749,13 @@ void MoverTracker<PointT>::decideMover(Track& track,
   if (!well_measured && track.hits < p.mover_min_age) return;
   // The tallest view counts: a cluster's height changes with the view (a van seen from straight
   // behind showed 0.7-0.9 m and its decision flickered around min_mover_height).
-  if (track.max_height < p.min_mover_height) return;
+  // A view hidden from below counts down to the object hiding it (standingHeight()), unless a
+  // moving object is beside it: then it is more likely that object's own upper part, cut off by
+  // its nearer lower body (urban cars, the KITTI van: such fragments became movers with the
+  // velocity of their sliding centroid).
+  if (track.max_height < p.min_mover_height &&
+      (track.max_standing_height < p.min_mover_height || besideMover(track)))
+    return;
   int votes = 0;
   for (const char f : track.fast) votes += f;
   if (!well_measured && votes < p.mover_votes) return;
@@ -755,7 +783,8 @@ template <typename PointT>
 void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
                                   const std::vector<pcl::PointIndices>& clusters,
                                   const Eigen::Vector3d& sensor_origin, double time,
-                                  const std::vector<std::uint8_t>& occluded) {
+                                  const std::vector<std::uint8_t>& occluded,
+                                  const std::vector<double>& floor_z) {
   const auto& p = parameters_;
   const bool use_registration = p.mode != "centroid";
   results_.assign(clusters.size(), ClusterResult());
@@ -789,6 +818,7 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     cand.features.large =
         cand.features.length > p.max_mover_length || cand.features.height > p.max_mover_height;
     cand.features.occluded = flag != 0;
+    if (floor_z.size() == clusters.size()) cand.features.floor_z = floor_z[c];
     results_[c].features = cand.features;
   }
 
@@ -1057,6 +1087,7 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     t.centroid_offset = (cand.features.centroid - m.measurement).template head<2>();
     if (!cand.features.large) {
       t.max_height = std::max(t.max_height, cand.features.height);
+      t.max_standing_height = std::max(t.max_standing_height, standingHeight(cand.features));
       t.max_length = std::max(t.max_length, cand.features.length);
     }
     // Not latched: a far vehicle merged with a hedge for a while must become a candidate again.
@@ -1136,10 +1167,16 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
       // A re-acquired track keeps the velocity it inherited, not what its filter made of the
       // partial views' centroids since (a wooded car's front emerging past a trunk: a jump to
       // another fragment gave it 2 m/s across its path, reported for the next 7 frames).
+      // A mover already confirmed (from views hidden from below, standingHeight()) keeps its
+      // velocity too: it is reported, and restarting it from zero reported a walker emerging
+      // from behind a parked car as standing still for three frames (urban pedestrian 8).
+      const bool keep_velocity = t.reacquired || t.confirmed;
+      const Eigen::Vector2d v_keep =
+          t.reacquired ? t.inherited_velocity : Eigen::Vector2d(t.filter.velocity());
       t.filter.initialize(cand.features.centroid.template head<2>(),
                           Eigen::Matrix2d::Identity() * meas_sigma * meas_sigma,
-                          t.reacquired ? t.inherited_velocity : Eigen::Vector2d::Zero(),
-                          t.reacquired ? p.reacquire_velocity_sigma : p.initial_velocity_sigma);
+                          keep_velocity ? v_keep : Eigen::Vector2d::Zero(),
+                          keep_velocity ? p.reacquire_velocity_sigma : p.initial_velocity_sigma);
       t.centroid_offset.setZero();
       t.velocity_filter = KalmanFilterCV();
       t.registered.clear();
@@ -1273,6 +1310,7 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     t.features = cand.features;
     t.large = cand.features.large;
     t.max_height = cand.features.large ? 0.0 : cand.features.height;
+    t.max_standing_height = cand.features.large ? 0.0 : standingHeight(cand.features);
     t.max_length = cand.features.large ? 0.0 : cand.features.length;
     t.fast.push_back(0);
     t.seen_occluded = cand.features.occluded;

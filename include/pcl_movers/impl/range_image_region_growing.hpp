@@ -300,6 +300,76 @@ void RangeImageRegionGrowing<PointT>::occludedSides(const PointCloud& organized,
   }
 }
 
+template <typename PointT>
+void RangeImageRegionGrowing<PointT>::occluderFloors(const PointCloud& organized,
+                                                     const pcl::Indices& objects,
+                                                     const std::vector<pcl::PointIndices>& clusters,
+                                                     float k, float d_min, int max_gap,
+                                                     float min_fraction, std::vector<int>& floors) {
+  floors.assign(clusters.size(), -1);
+  const int width = static_cast<int>(organized.width), height = static_cast<int>(organized.height);
+  if (height < 2 || width < 1 || static_cast<std::size_t>(width) * height != organized.size())
+    return;
+  // Per cell, as in occludedSides(): -2 empty, -3 ground, -1 an object point outside every
+  // cluster, else the cluster index.
+  const std::size_t n = organized.size();
+  std::vector<int> label(n, -2);
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto& q = organized[i];
+    if (std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z)) label[i] = -3;
+  }
+  for (const auto i : objects)
+    if (i >= 0 && static_cast<std::size_t>(i) < n && label[i] == -3) label[i] = -1;
+  // Lowest point of every cluster.
+  std::vector<int> lowest(clusters.size(), -1);
+  for (std::size_t c = 0; c < clusters.size(); ++c)
+    for (const auto i : clusters[c].indices) {
+      if (i < 0 || static_cast<std::size_t>(i) >= n || label[i] == -2) continue;
+      label[i] = static_cast<int>(c);
+      if (lowest[c] < 0 || organized[i].z < organized[lowest[c]].z) lowest[c] = i;
+    }
+  const auto range = [&organized](std::size_t i) { return organized[i].getVector3fMap().norm(); };
+  std::vector<int> bottom;  // per column of the cluster: its lowest cell (rows run top to bottom)
+  std::vector<int> columns;
+  for (std::size_t c = 0; c < clusters.size(); ++c) {
+    columns.clear();
+    for (const auto i : clusters[c].indices)
+      if (i >= 0 && static_cast<std::size_t>(i) < n && label[i] == static_cast<int>(c))
+        columns.push_back(i % width);
+    if (columns.empty()) continue;
+    std::sort(columns.begin(), columns.end());
+    columns.erase(std::unique(columns.begin(), columns.end()), columns.end());
+    bottom.assign(columns.size(), -1);
+    for (const auto i : clusters[c].indices) {
+      if (i < 0 || static_cast<std::size_t>(i) >= n || label[i] != static_cast<int>(c)) continue;
+      const auto slot = static_cast<std::size_t>(
+          std::lower_bound(columns.begin(), columns.end(), i % width) - columns.begin());
+      if (bottom[slot] < 0 || i / width > bottom[slot] / width) bottom[slot] = i;
+    }
+    int hidden = 0, floor = -1;
+    for (const int b : bottom) {
+      const int row = b / width, col = b % width;
+      int j = -1;
+      for (int s = 1; s <= max_gap + 1 && row + s < height; ++s) {
+        const int idx = (row + s) * width + col;
+        if (label[idx] != -2) {
+          j = idx;
+          break;
+        }
+      }
+      if (j < 0 || label[j] == -3 || label[j] == static_cast<int>(c)) continue;
+      const float r = range(static_cast<std::size_t>(b)), rj = range(static_cast<std::size_t>(j));
+      if (!(rj < r - std::max(k * rj, d_min))) continue;
+      ++hidden;
+      const int low = label[j] >= 0 ? lowest[static_cast<std::size_t>(label[j])] : j;
+      if (floor < 0 || organized[low].z < organized[floor].z) floor = low;
+    }
+    if (hidden > 0 &&
+        static_cast<float>(hidden) >= min_fraction * static_cast<float>(bottom.size()))
+      floors[c] = floor;
+  }
+}
+
 }  // namespace pcl_movers
 
 #define PCL_MOVERS_INSTANTIATE_RangeImageRegionGrowing(T) \
