@@ -329,22 +329,22 @@ void RangeImageRegionGrowing<PointT>::occluderFloors(const PointCloud& organized
       if (lowest[c] < 0 || organized[i].z < organized[lowest[c]].z) lowest[c] = i;
     }
   const auto range = [&organized](std::size_t i) { return organized[i].getVector3fMap().norm(); };
-  std::vector<int> bottom;  // per column of the cluster: its lowest cell (rows run top to bottom)
-  std::vector<int> columns;
+  // Per column: the cluster's lowest cell there (rows run top to bottom), -1 = none; the columns
+  // a cluster touched are reset after it.
+  std::vector<int> bottom_of(static_cast<std::size_t>(width), -1);
+  std::vector<int> bottom;
   for (std::size_t c = 0; c < clusters.size(); ++c) {
-    columns.clear();
-    for (const auto i : clusters[c].indices)
-      if (i >= 0 && static_cast<std::size_t>(i) < n && label[i] == static_cast<int>(c))
-        columns.push_back(i % width);
-    if (columns.empty()) continue;
-    std::sort(columns.begin(), columns.end());
-    columns.erase(std::unique(columns.begin(), columns.end()), columns.end());
-    bottom.assign(columns.size(), -1);
+    bottom.clear();
     for (const auto i : clusters[c].indices) {
       if (i < 0 || static_cast<std::size_t>(i) >= n || label[i] != static_cast<int>(c)) continue;
-      const auto slot = static_cast<std::size_t>(
-          std::lower_bound(columns.begin(), columns.end(), i % width) - columns.begin());
-      if (bottom[slot] < 0 || i / width > bottom[slot] / width) bottom[slot] = i;
+      int& b = bottom_of[static_cast<std::size_t>(i % width)];
+      if (b < 0) bottom.push_back(i % width);
+      if (b < 0 || i > b) b = i;  // same column: a larger index is a lower row
+    }
+    for (int& col : bottom) {
+      const int cell = bottom_of[static_cast<std::size_t>(col)];
+      bottom_of[static_cast<std::size_t>(col)] = -1;
+      col = cell;
     }
     int hidden = 0, floor = -1;
     for (const int b : bottom) {
