@@ -146,6 +146,13 @@ class RangeImageRegionGrowing : public pcl::PCLBase<PointT> {
                              int max_gap, float min_fraction, std::vector<int>& floors);
 
  protected:
+  /** \brief Cell labels of occludedSides() and occluderFloors(): kEmptyCell (no point),
+   * kGroundCell (a point not in `objects`), kObjectCell (an object point in no cluster), else the
+   * index of the cluster holding the cell. */
+  static void cellLabels(const PointCloud& organized, const pcl::Indices& objects,
+                         const std::vector<pcl::PointIndices>& clusters, std::vector<int>& label);
+  static constexpr int kEmptyCell = -2, kGroundCell = -3, kObjectCell = -1;
+
   /** \brief Root of the set holding i, with path halving. */
   int findRoot(int i);
 

@@ -238,6 +238,27 @@ void RangeImageRegionGrowing<PointT>::segment(std::vector<pcl::PointIndices>& cl
 }
 
 template <typename PointT>
+void RangeImageRegionGrowing<PointT>::cellLabels(const PointCloud& organized,
+                                                 const pcl::Indices& objects,
+                                                 const std::vector<pcl::PointIndices>& clusters,
+                                                 std::vector<int>& label) {
+  // Ground cells are "valid" (they end a run) but never occluders.
+  const std::size_t n = organized.size();
+  label.assign(n, kEmptyCell);
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto& q = organized[i];
+    if (std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z)) label[i] = kGroundCell;
+  }
+  for (const auto i : objects)
+    if (i >= 0 && static_cast<std::size_t>(i) < n && label[i] == kGroundCell)
+      label[i] = kObjectCell;
+  for (std::size_t c = 0; c < clusters.size(); ++c)
+    for (const auto i : clusters[c].indices)
+      if (i >= 0 && static_cast<std::size_t>(i) < n && label[i] != kEmptyCell)
+        label[i] = static_cast<int>(c);
+}
+
+template <typename PointT>
 void RangeImageRegionGrowing<PointT>::occludedSides(const PointCloud& organized,
                                                     const pcl::Indices& objects,
                                                     const std::vector<pcl::PointIndices>& clusters,
@@ -249,20 +270,9 @@ void RangeImageRegionGrowing<PointT>::occludedSides(const PointCloud& organized,
   if (organized.height < 1 || width < 2 ||
       static_cast<std::size_t>(width) * organized.height != organized.size())
     return;
-  // Per cell: -2 empty, -1 a non-ground point outside every cluster, else the cluster index.
-  // Ground cells are "valid" (they end a run) but never occluders: -3.
   const std::size_t n = organized.size();
-  std::vector<int> label(n, -2);
-  for (std::size_t i = 0; i < n; ++i) {
-    const auto& q = organized[i];
-    if (std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z)) label[i] = -3;
-  }
-  for (const auto i : objects)
-    if (i >= 0 && static_cast<std::size_t>(i) < n && label[i] == -3) label[i] = -1;
-  for (std::size_t c = 0; c < clusters.size(); ++c)
-    for (const auto i : clusters[c].indices)
-      if (i >= 0 && static_cast<std::size_t>(i) < n && label[i] != -2)
-        label[i] = static_cast<int>(c);
+  std::vector<int> label;
+  cellLabels(organized, objects, clusters, label);
   const auto range = [&organized](std::size_t i) { return organized[i].getVector3fMap().norm(); };
   for (std::size_t c = 0; c < clusters.size(); ++c) {
     int boundary[2] = {0, 0}, occluded[2] = {0, 0};
@@ -280,7 +290,7 @@ void RangeImageRegionGrowing<PointT>::occludedSides(const PointCloud& organized,
             cc = (cc + width) % width;
           }
           const int idx = row * width + cc;
-          if (label[idx] != -2) {
+          if (label[idx] != kEmptyCell) {
             j = idx;
             break;
           }
@@ -288,7 +298,7 @@ void RangeImageRegionGrowing<PointT>::occludedSides(const PointCloud& organized,
         if (j >= 0 && label[j] == static_cast<int>(c)) continue;  // inside the cluster
         ++boundary[side];
         // Empty beyond the gap, or ground: no nearer surface ends the cluster here.
-        if (j < 0 || label[j] == -3) continue;
+        if (j < 0 || label[j] == kGroundCell) continue;
         const float rj = range(static_cast<std::size_t>(j));
         if (rj < r - std::max(k * rj, d_min)) ++occluded[side];
       }
@@ -310,22 +320,14 @@ void RangeImageRegionGrowing<PointT>::occluderFloors(const PointCloud& organized
   const int width = static_cast<int>(organized.width), height = static_cast<int>(organized.height);
   if (height < 2 || width < 1 || static_cast<std::size_t>(width) * height != organized.size())
     return;
-  // Per cell, as in occludedSides(): -2 empty, -3 ground, -1 an object point outside every
-  // cluster, else the cluster index.
   const std::size_t n = organized.size();
-  std::vector<int> label(n, -2);
-  for (std::size_t i = 0; i < n; ++i) {
-    const auto& q = organized[i];
-    if (std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z)) label[i] = -3;
-  }
-  for (const auto i : objects)
-    if (i >= 0 && static_cast<std::size_t>(i) < n && label[i] == -3) label[i] = -1;
+  std::vector<int> label;
+  cellLabels(organized, objects, clusters, label);
   // Lowest point of every cluster.
   std::vector<int> lowest(clusters.size(), -1);
   for (std::size_t c = 0; c < clusters.size(); ++c)
     for (const auto i : clusters[c].indices) {
-      if (i < 0 || static_cast<std::size_t>(i) >= n || label[i] == -2) continue;
-      label[i] = static_cast<int>(c);
+      if (i < 0 || static_cast<std::size_t>(i) >= n || label[i] != static_cast<int>(c)) continue;
       if (lowest[c] < 0 || organized[i].z < organized[lowest[c]].z) lowest[c] = i;
     }
   const auto range = [&organized](std::size_t i) { return organized[i].getVector3fMap().norm(); };
@@ -352,12 +354,12 @@ void RangeImageRegionGrowing<PointT>::occluderFloors(const PointCloud& organized
       int j = -1;
       for (int s = 1; s <= max_gap + 1 && row + s < height; ++s) {
         const int idx = (row + s) * width + col;
-        if (label[idx] != -2) {
+        if (label[idx] != kEmptyCell) {
           j = idx;
           break;
         }
       }
-      if (j < 0 || label[j] == -3 || label[j] == static_cast<int>(c)) continue;
+      if (j < 0 || label[j] == kGroundCell || label[j] == static_cast<int>(c)) continue;
       const float r = range(static_cast<std::size_t>(b)), rj = range(static_cast<std::size_t>(j));
       if (!(rj < r - std::max(k * rj, d_min))) continue;
       ++hidden;
