@@ -753,12 +753,18 @@ void MoverTracker<PointT>::decideMover(Track& track,
   // moving object is beside it: then it is more likely that object's own upper part, cut off by
   // its nearer lower body (urban cars, the KITTI van: such fragments became movers with the
   // velocity of their sliding centroid).
-  if (track.max_height < p.min_mover_height &&
-      (track.max_standing_height < p.min_mover_height || besideMover(track)))
+  const bool seen_standing_only = track.max_height < p.min_mover_height;
+  if (seen_standing_only && (track.max_standing_height < p.min_mover_height || besideMover(track)))
     return;
   int votes = 0;
   for (const char f : track.fast) votes += f;
   if (!well_measured && votes < p.mover_votes) return;
+  // Measured only down to what hides it, a track needs every speed vote of a full window: small
+  // fragments above parked cars in a real street (KITTI city, 20-50 points, 0.1-0.3 m tall)
+  // moved with their centroids' jumps and passed mover_votes of them.
+  if (seen_standing_only &&
+      (static_cast<int>(track.fast.size()) < p.mover_window || votes < p.mover_window))
+    return;
   const auto& first = track.history.front();
   const auto& last = track.history.back();
   const double elapsed = last.z() - first.z();
