@@ -225,6 +225,13 @@ int count(const std::vector<bool>& v) {
   return n;
 }
 
+/** Index of the first true entry (the first mover frame), -1 if none. */
+int firstTrue(const std::vector<bool>& v) {
+  for (std::size_t f = 0; f < v.size(); ++f)
+    if (v[f]) return static_cast<int>(f);
+  return -1;
+}
+
 }  // namespace
 
 TEST(FreeSpaceMap, TrackerRejectsStaticObjectWithSlidingCentroid) {
@@ -257,9 +264,7 @@ TEST(FreeSpaceMap, TrackerConfirmsMoverThroughFreeSpace) {
     pcl_movers::DetectorParameters params;
     params.mode = mode;
     const auto mover = runTracker(params, true, 20, scene, all);
-    int first = -1;
-    for (std::size_t f = 0; f < mover.size(); ++f)
-      if (mover[f] && first < 0) first = static_cast<int>(f);
+    const int first = firstTrue(mover);
     EXPECT_GE(first, 0) << mode;
     EXPECT_LE(first, 10) << mode;
     // Latched once confirmed.
@@ -307,9 +312,7 @@ TEST(FreeSpaceMap, FastMoverSeenFromTheFirstFrameIsConfirmedBeforeTheLagHasPasse
     auto all = [](int, const Eigen::Vector3f&) { return true; };
     pcl_movers::DetectorParameters params;
     const auto mover = runTracker(params, true, 12, scene, all);
-    int first = -1;
-    for (std::size_t f = 0; f < mover.size(); ++f)
-      if (mover[f] && first < 0) first = static_cast<int>(f);
+    const int first = firstTrue(mover);
     SCOPED_TRACE("speed " + std::to_string(speed));
     if (speed > 0) {
       EXPECT_GE(first, 0);
@@ -433,9 +436,7 @@ TEST(FreeSpaceMap, FreeSpaceVotesAccumulateWithTheSpeedVotes) {
   auto all = [](int, const Eigen::Vector3f&) { return true; };
   pcl_movers::DetectorParameters params;
   const auto mover = runTracker(params, true, 15, scene, all);
-  int first = -1;
-  for (std::size_t f = 0; f < mover.size(); ++f)
-    if (mover[f] && first < 0) first = static_cast<int>(f);
+  const int first = firstTrue(mover);
   EXPECT_GE(first, 3);  // never before mover_min_age updates
   EXPECT_LE(first, 4);
 }

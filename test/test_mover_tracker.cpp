@@ -69,6 +69,14 @@ pcl_movers::DetectorParameters defaults() {
   return pcl_movers::DetectorParameters();
 }
 
+/** Keeps the points of cluster `c` above `z_min` only (what shows above a nearer object). */
+void keepAbove(SceneBuilder& scene, std::size_t c, float z_min) {
+  pcl::PointIndices top;
+  for (const int i : scene.clusters[c].indices)
+    if ((*scene.cloud)[i].z > z_min) top.indices.push_back(i);
+  scene.clusters[c] = top;
+}
+
 /** Runs one frame and returns the cluster results. */
 std::vector<Tracker::ClusterResult> step(Tracker& tracker, SceneBuilder& scene,
                                          const Eigen::Vector3d& sensor, double time) {
@@ -1154,12 +1162,7 @@ TEST(MoverTracker, ConfirmedWalkerHoldsItsHeadAndShouldersSeenAboveAParkedCar) {
     SceneBuilder scene;
     scene.addBox(sensor, Eigen::Vector2d(15, -4 + speed * t), 0.0, 0.5, 0.6, 1.8);
     const bool hidden = k >= 15;  // from here only the top 0.3 m is seen
-    if (hidden) {
-      pcl::PointIndices top;
-      for (const int i : scene.clusters[0].indices)
-        if ((*scene.cloud)[i].z > 1.5f) top.indices.push_back(i);
-      scene.clusters.assign(1, top);
-    }
+    if (hidden) keepAbove(scene, 0, 1.5f);
     const auto results = step(tracker, scene, sensor, t);
     ASSERT_EQ(results.size(), 1u);
     if (!hidden) {
@@ -1171,16 +1174,6 @@ TEST(MoverTracker, ConfirmedWalkerHoldsItsHeadAndShouldersSeenAboveAParkedCar) {
     EXPECT_TRUE(results[0].mover) << "frame " << k;
   }
 }
-
-namespace {
-/** Keeps the points of cluster `c` above `z_min` only (what shows above a nearer object). */
-void keepAbove(SceneBuilder& scene, std::size_t c, float z_min) {
-  pcl::PointIndices top;
-  for (const int i : scene.clusters[c].indices)
-    if ((*scene.cloud)[i].z > z_min) top.indices.push_back(i);
-  scene.clusters[c] = top;
-}
-}  // namespace
 
 // A walker seen only above a parked car: its 0.3 m head-and-shoulders cluster is under
 // min_mover_height, but the car hides its lower part (the detector passes the car's lowest point

@@ -389,14 +389,14 @@ class MoverTracker {
                             bool occluded, double time, double range, double since,
                             bool reanchor = false) const;
 
-  /** \brief Updates the mover flag of a track after an update; `points` are the world points of
-   * the cluster just assigned (for the free-space test). */
   /** \brief Height of a cluster for the mover height test: down to the lowest point of a nearer
    * object hiding its lower part (standing_height_from_occluder), else its own extent. */
+  double standingHeight(const ClusterFeatures& features) const;
   /** \brief Whether a moving track other than `track` (a mover, confirmed, or faster than
    * mover_speed) lies within half its longest view plus gate_margin of `track`'s position. */
   bool besideMover(const Track& track) const;
-  double standingHeight(const ClusterFeatures& features) const;
+  /** \brief Updates the mover flag of a track after an update; `points` are the world points of
+   * the cluster just assigned (for the free-space test). */
   void decideMover(Track& track, const std::vector<Eigen::Vector3f>& points) const;
 
   /** \brief True when the track's motion is well determined enough for an early confirmation
