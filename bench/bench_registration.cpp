@@ -52,8 +52,7 @@ using BrMethod =
 
 // ------------------------------------------------------------------ methods, with their settings
 // The translation window of every method must cover the 0-3 m offsets of the guesses, so ICP and
-// GICP get a 3.5 m max correspondence distance and NDT a 1 m cell (its basin of convergence is
-// about a cell; larger cells blur 0.2-2 m objects into one Gaussian).
+// GICP get a 3.5 m max correspondence distance.
 struct Method {
   std::string name;
   std::string settings;
@@ -67,6 +66,37 @@ struct Method {
  * 7). 3 by default, the paper's reduced vertical resolution: same success on both sets, ROC AUC
  * 0.959 / 1.000 (7 slices: 0.962 / 1.000), about half the time. */
 int g_vertical_slices = 3;
+
+/** NDT's cell size [m] and Newton step size [m]. Its success on these pairs depends strongly on
+ * both: its basin of convergence is about a cell, so 1 m cells (PCL's default and tutorial value)
+ * lose most guesses more than a metre off, and they fail fast, which makes NDT look cheap. --report
+ * therefore sweeps kNdtResolutions x kNdtSteps first and compares against the setting with the
+ * best success from guesses <= 2.5 m off (both sets summed; ties to the faster): the NDT a user
+ * would configure for this task. These defaults are that choice in the 2026-12-02 run; --quick and
+ * the Google Benchmark timings use them. */
+struct NdtSettings {
+  float resolution = 2.5f;
+  double step = 1.0;
+};
+NdtSettings g_ndt;
+const float kNdtResolutions[] = {1.f, 1.5f, 2.f, 2.5f, 3.f};
+const double kNdtSteps[] = {0.3, 1.0, 2.0};
+
+pcl::Registration<pcl::PointXYZ, pcl::PointXYZ>::Ptr makeNdt(const NdtSettings& s) {
+  auto r = pcl::make_shared<pcl::NormalDistributionsTransform<pcl::PointXYZ, pcl::PointXYZ>>();
+  r->setResolution(s.resolution);
+  r->setStepSize(s.step);
+  r->setMaximumIterations(50);
+  r->setTransformationEpsilon(1e-3);
+  return r;
+}
+
+std::string ndtSettings(const NdtSettings& s) {
+  char b[96];
+  std::snprintf(b, sizeof(b), "%.1f m cells, step %.1f m, 50 iterations, transformation eps 1e-3",
+                s.resolution, s.step);
+  return b;
+}
 
 /** --exact: every BhattacharyaRegistration with setCoarseToFine(false) (the exact full-window
  * search), to compare the default coarse-to-fine search against it in one binary. */
@@ -111,17 +141,8 @@ std::vector<Method> methods() {
                  r->setTransformationEpsilon(1e-8);
                  return r;
                }});
-  m.push_back(
-      {"pcl::NormalDistributionsTransform",
-       "1.0 m cells, step 0.3 m, 50 iterations, transformation eps 1e-3", [] {
-         auto r =
-             pcl::make_shared<pcl::NormalDistributionsTransform<pcl::PointXYZ, pcl::PointXYZ>>();
-         r->setResolution(1.0f);
-         r->setStepSize(0.3);
-         r->setMaximumIterations(50);
-         r->setTransformationEpsilon(1e-3);
-         return r;
-       }});
+  m.push_back({"pcl::NormalDistributionsTransform", ndtSettings(g_ndt) + " (see NDT's settings)",
+               [s = g_ndt] { return makeNdt(s); }});
   m.push_back({"Bhattacharyya, 5 yaw layers, occluders given",
                "as 5 yaw layers, plus the occluder returns of both scans (a second, local search "
                "on the mutually visible parts)",
@@ -286,6 +307,75 @@ void table(const std::string& title, const std::vector<Method>& ms,
   }
 }
 
+/** Success [%] from guesses up to 2.5 m off; NaN without trials. */
+double success25(const Result& r, float threshold) {
+  const Successes c = countSuccesses(r, threshold);
+  return c.n25 > 0 ? 100.0 * c.ok25 / c.n25 : NAN;
+}
+
+/** NDT at every setting of kNdtResolutions x kNdtSteps on the trials of the main tables (same
+ * seeds), interleaved with the 5-layer Bhattacharyya method for the time ratios. Result 0 of each
+ * set is the Bhattacharyya method, result k + 1 is settings[k]. */
+struct NdtSweep {
+  std::vector<NdtSettings> settings;
+  std::vector<Result> sim, real;
+  std::size_t best = 0;  ///< index into settings: most successes, ties to the faster
+};
+
+NdtSweep sweepNdt(const std::vector<RegistrationPair>& sim,
+                  const std::vector<RegistrationPair>& real) {
+  NdtSweep w;
+  std::vector<Method> ms = {{"Bhattacharyya, 5 yaw layers", "", [] { return makeBr(5); }}};
+  for (const float resolution : kNdtResolutions)
+    for (const double step : kNdtSteps) {
+      const NdtSettings s{resolution, step};
+      w.settings.push_back(s);
+      ms.push_back({ndtSettings(s), "", [s] { return makeNdt(s); }});
+    }
+  w.sim = runAll(ms, sim, makeTrials(sim.size(), 11));
+  if (!real.empty()) w.real = runAll(ms, real, makeTrials(real.size(), 13));
+  double best_score = -1.0, best_ms = 0.0;
+  for (std::size_t k = 0; k < w.settings.size(); ++k) {
+    double score = success25(w.sim[k + 1], 0.1f), ms_sum = median(w.sim[k + 1].ms);
+    if (!w.real.empty()) {
+      score += success25(w.real[k + 1], 0.3f);
+      ms_sum += median(w.real[k + 1].ms);
+    }
+    if (score > best_score || (score == best_score && ms_sum < best_ms)) {
+      best_score = score;
+      best_ms = ms_sum;
+      w.best = k;
+    }
+  }
+  return w;
+}
+
+void printNdtSweep(const NdtSweep& w) {
+  std::printf(
+      "\n### NDT's settings\n\n"
+      "NDT's success on these pairs depends strongly on its cell size and Newton step (its basin "
+      "of convergence is about a cell), and a setting that fails fast also looks cheap. So every "
+      "setting below ran on the trials of the tables that follow, interleaved with the 5-layer "
+      "Bhattacharyya method, and the comparison uses the one with the most successes from "
+      "guesses ≤ 2.5 m off (both sets summed; ties to the faster): the NDT a user would configure "
+      "for this task. Its row is in bold; the ratio of any other setting can be read off here.\n\n"
+      "| cells [m] | step [m] | simulated: success ≤ 2.5 m | median ms | NDT / BR(5) | real: "
+      "success ≤ 2.5 m | median ms | NDT / BR(5) |\n|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  auto cells = [](const std::vector<Result>& r, std::size_t k, float threshold) {
+    if (r.empty()) return std::string("– | – | –");
+    char b[96];
+    std::snprintf(b, sizeof(b), "%.1f %% | %.2f | %.1fx", success25(r[k + 1], threshold),
+                  median(r[k + 1].ms), median(r[k + 1].ms) / median(r[0].ms));
+    return std::string(b);
+  };
+  for (std::size_t k = 0; k < w.settings.size(); ++k) {
+    const char* mark = k == w.best ? "**" : "";
+    std::printf("| %s%.1f%s | %s%.1f%s | %s | %s |\n", mark, w.settings[k].resolution, mark, mark,
+                w.settings[k].step, mark, cells(w.sim, k, 0.1f).c_str(),
+                cells(w.real, k, 0.3f).c_str());
+  }
+}
+
 /** B of a registration of every pair from a 0-1 m guess (positives) / of different objects. */
 std::vector<float> similarities(const std::vector<RegistrationPair>& pairs, int yaws, unsigned seed,
                                 float max_offset) {
@@ -307,6 +397,13 @@ std::vector<float> similarities(const std::vector<RegistrationPair>& pairs, int 
 int report() {
   std::setvbuf(stdout, nullptr, _IOLBF, 0);
   pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
+  const auto sim = pcl_movers::eval::makeSimulatedPairs(300, 7);
+  const std::string folder = std::string(PCL_MOVERS_SHARED_DATA) + "/kitti-tracking-0000-a";
+  std::vector<RegistrationPair> real;
+  if (std::ifstream(folder + "/poses.txt"))
+    real = pcl_movers::eval::loadKittiPairs(folder, {0, 1, 3}, {1, 3}, 2);
+  const NdtSweep ndt_sweep = sweepNdt(sim, real);
+  g_ndt = ndt_sweep.settings[ndt_sweep.best];
   const auto ms = methods();
   std::printf("## Registration: BhattacharyaRegistration vs ICP, GICP, NDT\n\n");
   std::printf(
@@ -321,8 +418,9 @@ int report() {
   std::printf("| method | settings |\n|---|---|\n");
   for (const auto& m : ms) std::printf("| %s | %s |\n", m.name.c_str(), m.settings.c_str());
 
+  printNdtSweep(ndt_sweep);
+
   std::vector<Result> res_sim, res_real;
-  const auto sim = pcl_movers::eval::makeSimulatedPairs(300, 7);
   table("Simulated pairs (exact motion)", ms, sim, 0.1f, 11, res_sim);
   {
     // Where the simulated failures are: success by class and range for every method.
@@ -367,10 +465,7 @@ int report() {
       "64-beam HDL-64E-like sensor, object moves 0-2 m and turns up to ±15°, the sensor "
       "moves 0-1.5 m, a static occluder in ~40 %% of the pairs; ≥ 10 points per view.\n");
 
-  const std::string folder = std::string(PCL_MOVERS_SHARED_DATA) + "/kitti-tracking-0000-a";
-  std::vector<RegistrationPair> real;
-  if (std::ifstream(folder + "/poses.txt")) {
-    real = pcl_movers::eval::loadKittiPairs(folder, {0, 1, 3}, {1, 3}, 2);
+  if (!real.empty()) {
     table("Real pairs (KITTI tracking 0000, frames 0-76)", ms, real, 0.3f, 13, res_real);
     std::printf(
         "\nThe moving van (track 0), the cyclist (1) and the parked van (3), frames f and f+1 "
@@ -455,10 +550,6 @@ int report() {
   // The targets of the registration issue, for the default 5-layer method (ms[1]), printed with
   // the measured values so that a regeneration shows at once which ones hold on this machine.
   {
-    auto success25 = [](const Result& r, float threshold) {
-      const Successes c = countSuccesses(r, threshold);
-      return c.n25 > 0 ? 100.0 * c.ok25 / c.n25 : NAN;
-    };
     auto ratio = [](const std::vector<Result>& r, std::size_t other) {
       return r.empty() ? NAN : median(r[other].ms) / median(r[1].ms);
     };
@@ -485,7 +576,7 @@ int report() {
                 met(s_sim, s_real, [](double v) { return v >= 95.0; }));
     std::printf("| median simulated error ≤ 0.05 m | %s | | %s |\n", cell(err_sim, " m", 3).c_str(),
                 err_sim <= 0.05 ? "✅" : "❌");
-    std::printf("| ≥ 10× faster than NDT (median time) | %s | %s | %s |\n",
+    std::printf("| ≥ 10× faster than NDT (median time; NDT at its best setting) | %s | %s | %s |\n",
                 cell(ndt_sim, "×").c_str(), cell(ndt_real, "×").c_str(),
                 met(ndt_sim, ndt_real, [](double v) { return v >= 10.0; }));
     std::printf("| ≥ 3× faster than ICP (median time) | %s | %s | %s |\n",
@@ -501,6 +592,23 @@ int report() {
         "top and docs/registration.md.\n",
         cell(success25(res_sim[5], 0.1f), " %").c_str(),
         res_real.empty() ? "–" : cell(success25(res_real[5], 0.3f), " %").c_str());
+    // The ratio against the setting of earlier reports (1 m cells, step 0.3 m), which fails fast.
+    for (std::size_t k = 0; k < ndt_sweep.settings.size(); ++k) {
+      const NdtSettings& st = ndt_sweep.settings[k];
+      if (st.resolution != 1.f || st.step != 0.3) continue;
+      auto r = [&](const std::vector<Result>& v, float threshold) {
+        if (v.empty()) return std::string("–");
+        char b[64];
+        std::snprintf(b, sizeof(b), "%.1fx at %.1f %% success",
+                      median(v[k + 1].ms) / median(v[0].ms), success25(v[k + 1], threshold));
+        return std::string(b);
+      };
+      std::printf(
+          "Against NDT with 1 m cells and a 0.3 m step (PCL's default cell, the setting of earlier "
+          "reports), which gives up on most guesses more than a cell off and so returns early, "
+          "BR(5) is %s on the simulated pairs and %s on the real ones (NDT's settings table).\n",
+          r(ndt_sweep.sim, 0.1f).c_str(), r(ndt_sweep.real, 0.3f).c_str());
+    }
   }
 
   // Grid variants of BhattacharyaRegistration on the simulated set.
