@@ -11,6 +11,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -503,4 +504,41 @@ TEST(RangeImageRegionGrowing, OccluderFloorsFindTheLowestPointOfTheNearerObjectB
     ASSERT_EQ(floors.size(), 1u);
     EXPECT_EQ(floors[0], -1);
   }
+}
+
+// The detector labels the cells once and hands the labels to both occlusion tests: they must
+// answer exactly as the calls that label the cells themselves, and labels of another image size
+// (stale ones) are refused (no flags) instead of being read out of bounds.
+TEST(RangeImageRegionGrowing, SharedCellLabelsGiveTheSameOcclusionAnswers) {
+  using RG = RangeImageRegionGrowing<pcl::PointXYZ>;
+  const std::vector<Box> boxes{Box{{20.f, -2.f, -1.f}, {22.f, 2.f, 0.5f}},           // car
+                               Box{{10.f, 0.8f, -1.f}, {10.5f, 1.4f, 1.5f}},         // post
+                               Box{{9.f, -3.f, -1.5f}, {9.2f, -1.f, -0.3f}},         // low car
+                               Box{{13.f, -2.25f, -0.45f}, {13.5f, -1.75f, 0.1f}}};  // head
+  const Cloud::Ptr cloud = rayCast(boxes);
+  const auto clusters = segment(cloud);
+  ASSERT_GE(clusters.size(), 4u);
+  pcl::Indices objects;
+  for (std::size_t i = 0; i < cloud->size(); ++i)
+    if (std::isfinite((*cloud)[i].x)) objects.push_back(static_cast<int>(i));
+  std::vector<std::uint8_t> sides, shared_sides;
+  std::vector<int> floors, shared_floors;
+  RG::occludedSides(*cloud, objects, clusters, 0.05f, 0.1f, 2, true, 0.3f, sides);
+  RG::occluderFloors(*cloud, objects, clusters, 0.05f, 0.1f, 2, 0.5f, floors);
+  RG::CellLabels labels;
+  RG::cellLabels(*cloud, objects, clusters, labels);
+  ASSERT_EQ(labels.label.size(), cloud->size());
+  RG::occludedSides(*cloud, labels, clusters, 0.05f, 0.1f, 2, true, 0.3f, shared_sides);
+  RG::occluderFloors(*cloud, labels, clusters, 0.05f, 0.1f, 2, 0.5f, shared_floors);
+  EXPECT_EQ(shared_sides, sides);
+  EXPECT_EQ(shared_floors, floors);
+  // The scene has both answers to share: an occluded side (the car behind the post) and a floor
+  // (the head above the low car).
+  EXPECT_TRUE(std::any_of(sides.begin(), sides.end(), [](std::uint8_t s) { return s != 0; }));
+  EXPECT_TRUE(std::any_of(floors.begin(), floors.end(), [](int f) { return f >= 0; }));
+  labels.label.pop_back();
+  RG::occludedSides(*cloud, labels, clusters, 0.05f, 0.1f, 2, true, 0.3f, shared_sides);
+  RG::occluderFloors(*cloud, labels, clusters, 0.05f, 0.1f, 2, 0.5f, shared_floors);
+  EXPECT_EQ(shared_sides, std::vector<std::uint8_t>(clusters.size(), 0));
+  EXPECT_EQ(shared_floors, std::vector<int>(clusters.size(), -1));
 }

@@ -7,6 +7,7 @@
 #include <pcl_movers/free_space_map.h>
 #include <pcl_movers/io/tracks.h>
 #include <pcl_movers/mover_tracker.h>
+#include <pcl_movers/range_image_region_growing.h>  // declarations only, for CellLabels
 #include <pcl_movers/sensor_model.h>
 
 #include <pcl/PointIndices.h>
@@ -22,11 +23,9 @@
 
 namespace pcl_movers {
 
-// The stage classes are only held by pointer here, so that this header stays light.
+// The other stage classes are only held by pointer here, so that this header stays light.
 template <typename PointT>
 class GroundPlaneFilter;
-template <typename PointT>
-class RangeImageRegionGrowing;
 template <typename PointT>
 class RangeImageOrganizer;
 
@@ -165,6 +164,8 @@ class MoverDetector {
   MoverTracker<PointT> tracker_;
   FreeSpaceMap free_space_;             ///< recent scans for the tracker's free-space test
   std::vector<std::uint8_t> occluded_;  ///< occluded sides of each cluster (last frame)
+  /// Cell labels of the last frame's range image, shared by occludedSides() and occluderFloors()
+  typename RangeImageRegionGrowing<PointT>::CellLabels cell_labels_;
   std::vector<int> floors_;      ///< per cluster: lowest point of a nearer object below, or -1
   std::vector<double> floor_z_;  ///< the same as world z (NaN: none), for the tracker
   StageObject<RangeImageOrganizer<PointT>> organizer_;

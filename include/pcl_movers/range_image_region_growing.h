@@ -108,6 +108,20 @@ class RangeImageRegionGrowing : public pcl::PCLBase<PointT> {
    * nearer object. */
   enum OccludedSide : std::uint8_t { kOccludedLeft = 1, kOccludedRight = 2 };
 
+  /** \brief What each cell of a range image holds, for occludedSides() and occluderFloors():
+   * kEmptyCell (no point), kGroundCell (a point not in the objects), kObjectCell (an object point
+   * in no cluster), else the index of the cluster holding the cell. Computed once per frame by
+   * cellLabels(), it serves both (the detector calls them back to back on the same image). */
+  struct CellLabels {
+    std::vector<int> label;
+  };
+  static constexpr int kEmptyCell = -2, kGroundCell = -3, kObjectCell = -1;
+
+  /** \brief Fills `labels` for the range image, its non-ground points `objects` and the clusters
+   * of segment(); the vector's memory is reused from call to call. */
+  static void cellLabels(const PointCloud& organized, const pcl::Indices& objects,
+                         const std::vector<pcl::PointIndices>& clusters, CellLabels& labels);
+
   /** \brief Which sides (columns) of each cluster are bounded by a nearer object, so that the
    * visible extent there is not the object's (it continues behind the occluder, and grows or
    * shrinks as the object emerges or hides).
@@ -131,6 +145,11 @@ class RangeImageRegionGrowing : public pcl::PCLBase<PointT> {
                             const std::vector<pcl::PointIndices>& clusters, float k, float d_min,
                             int max_gap, bool wrap_around, float min_fraction,
                             std::vector<std::uint8_t>& sides);
+  /** \brief occludedSides() on labels computed by cellLabels() for the same image and clusters. */
+  static void occludedSides(const PointCloud& organized, const CellLabels& labels,
+                            const std::vector<pcl::PointIndices>& clusters, float k, float d_min,
+                            int max_gap, bool wrap_around, float min_fraction,
+                            std::vector<std::uint8_t>& sides);
 
   /** \brief For each cluster hidden from below by a nearer object (a walker's head and shoulders
    * seen above a parked car), the index of the lowest point of that object, else -1.
@@ -144,15 +163,12 @@ class RangeImageRegionGrowing : public pcl::PCLBase<PointT> {
   static void occluderFloors(const PointCloud& organized, const pcl::Indices& objects,
                              const std::vector<pcl::PointIndices>& clusters, float k, float d_min,
                              int max_gap, float min_fraction, std::vector<int>& floors);
+  /** \brief occluderFloors() on labels computed by cellLabels() for the same image and clusters. */
+  static void occluderFloors(const PointCloud& organized, const CellLabels& labels,
+                             const std::vector<pcl::PointIndices>& clusters, float k, float d_min,
+                             int max_gap, float min_fraction, std::vector<int>& floors);
 
  protected:
-  /** \brief Cell labels of occludedSides() and occluderFloors(): kEmptyCell (no point),
-   * kGroundCell (a point not in `objects`), kObjectCell (an object point in no cluster), else the
-   * index of the cluster holding the cell. */
-  static void cellLabels(const PointCloud& organized, const pcl::Indices& objects,
-                         const std::vector<pcl::PointIndices>& clusters, std::vector<int>& label);
-  static constexpr int kEmptyCell = -2, kGroundCell = -3, kObjectCell = -1;
-
   /** \brief Root of the set holding i, with path halving. */
   int findRoot(int i);
 

@@ -201,9 +201,11 @@ void MoverDetector<PointT>::process(const PointCloudConstPtr& scan, const Eigen:
     tracker_.setFreeSpaceMap(nullptr);
   }
   // Occluded cluster sides (range image, sensor frame): measurements there can slide.
+  if (p.occluded_fraction > 0 || p.standing_height_from_occluder)
+    RangeImageRegionGrowing<PointT>::cellLabels(*organized, *objects, clusters, cell_labels_);
   if (p.occluded_fraction > 0)
     RangeImageRegionGrowing<PointT>::occludedSides(
-        *organized, *objects, clusters, static_cast<float>(p.depth_ratio),
+        *organized, cell_labels_, clusters, static_cast<float>(p.depth_ratio),
         static_cast<float>(p.depth_min), p.max_gap, true, static_cast<float>(p.occluded_fraction),
         occluded_);
   else
@@ -212,7 +214,7 @@ void MoverDetector<PointT>::process(const PointCloudConstPtr& scan, const Eigen:
   floor_z_.clear();
   if (p.standing_height_from_occluder) {
     RangeImageRegionGrowing<PointT>::occluderFloors(
-        *organized, *objects, clusters, static_cast<float>(p.depth_ratio),
+        *organized, cell_labels_, clusters, static_cast<float>(p.depth_ratio),
         static_cast<float>(p.depth_min), p.max_gap, 0.5f, floors_);
     floor_z_.assign(clusters.size(), std::numeric_limits<double>::quiet_NaN());
     for (std::size_t c = 0; c < clusters.size(); ++c)

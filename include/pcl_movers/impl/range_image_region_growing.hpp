@@ -241,8 +241,9 @@ template <typename PointT>
 void RangeImageRegionGrowing<PointT>::cellLabels(const PointCloud& organized,
                                                  const pcl::Indices& objects,
                                                  const std::vector<pcl::PointIndices>& clusters,
-                                                 std::vector<int>& label) {
+                                                 CellLabels& labels) {
   // Ground cells are "valid" (they end a run) but never occluders.
+  std::vector<int>& label = labels.label;
   const std::size_t n = organized.size();
   label.assign(n, kEmptyCell);
   for (std::size_t i = 0; i < n; ++i) {
@@ -265,14 +266,25 @@ void RangeImageRegionGrowing<PointT>::occludedSides(const PointCloud& organized,
                                                     float k, float d_min, int max_gap,
                                                     bool wrap_around, float min_fraction,
                                                     std::vector<std::uint8_t>& sides) {
+  CellLabels labels;
+  cellLabels(organized, objects, clusters, labels);
+  occludedSides(organized, labels, clusters, k, d_min, max_gap, wrap_around, min_fraction, sides);
+}
+
+template <typename PointT>
+void RangeImageRegionGrowing<PointT>::occludedSides(const PointCloud& organized,
+                                                    const CellLabels& labels,
+                                                    const std::vector<pcl::PointIndices>& clusters,
+                                                    float k, float d_min, int max_gap,
+                                                    bool wrap_around, float min_fraction,
+                                                    std::vector<std::uint8_t>& sides) {
   sides.assign(clusters.size(), 0);
   const int width = static_cast<int>(organized.width);
-  if (organized.height < 1 || width < 2 ||
-      static_cast<std::size_t>(width) * organized.height != organized.size())
-    return;
   const std::size_t n = organized.size();
-  std::vector<int> label;
-  cellLabels(organized, objects, clusters, label);
+  if (organized.height < 1 || width < 2 ||
+      static_cast<std::size_t>(width) * organized.height != n || labels.label.size() != n)
+    return;
+  const std::vector<int>& label = labels.label;
   const auto range = [&organized](std::size_t i) { return organized[i].getVector3fMap().norm(); };
   for (std::size_t c = 0; c < clusters.size(); ++c) {
     int boundary[2] = {0, 0}, occluded[2] = {0, 0};
@@ -316,13 +328,24 @@ void RangeImageRegionGrowing<PointT>::occluderFloors(const PointCloud& organized
                                                      const std::vector<pcl::PointIndices>& clusters,
                                                      float k, float d_min, int max_gap,
                                                      float min_fraction, std::vector<int>& floors) {
+  CellLabels labels;
+  cellLabels(organized, objects, clusters, labels);
+  occluderFloors(organized, labels, clusters, k, d_min, max_gap, min_fraction, floors);
+}
+
+template <typename PointT>
+void RangeImageRegionGrowing<PointT>::occluderFloors(const PointCloud& organized,
+                                                     const CellLabels& labels,
+                                                     const std::vector<pcl::PointIndices>& clusters,
+                                                     float k, float d_min, int max_gap,
+                                                     float min_fraction, std::vector<int>& floors) {
   floors.assign(clusters.size(), -1);
   const int width = static_cast<int>(organized.width), height = static_cast<int>(organized.height);
-  if (height < 2 || width < 1 || static_cast<std::size_t>(width) * height != organized.size())
-    return;
   const std::size_t n = organized.size();
-  std::vector<int> label;
-  cellLabels(organized, objects, clusters, label);
+  if (height < 2 || width < 1 || static_cast<std::size_t>(width) * height != n ||
+      labels.label.size() != n)
+    return;
+  const std::vector<int>& label = labels.label;
   // Lowest point of every cluster.
   std::vector<int> lowest(clusters.size(), -1);
   for (std::size_t c = 0; c < clusters.size(); ++c)
