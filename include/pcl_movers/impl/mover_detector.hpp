@@ -200,9 +200,10 @@ void MoverDetector<PointT>::process(const PointCloudConstPtr& scan, const Eigen:
   } else {
     tracker_.setFreeSpaceMap(nullptr);
   }
-  // Occluded cluster sides (range image, sensor frame): measurements there can slide.
+  // One labelling of the range image's cells serves both occlusion tests below.
   if (p.occluded_fraction > 0 || p.standing_height_from_occluder)
     RangeImageRegionGrowing<PointT>::cellLabels(*organized, *objects, clusters, cell_labels_);
+  // Occluded cluster sides (range image, sensor frame): measurements there can slide.
   if (p.occluded_fraction > 0)
     RangeImageRegionGrowing<PointT>::occludedSides(
         *organized, cell_labels_, clusters, static_cast<float>(p.depth_ratio),
