@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Regenerates the viewer screenshots of docs/viewer.md (docs/images/viewer_*.png) with the tools
-# of a build dir: pcl_movers_detect on the simulated sample and on KITTI tracking 0000, then
-# pcl_movers_viewer off-screen. Runs under xvfb-run when there is no X display.
+# of a build dir: pcl_movers_detect on the simulated sample, on KITTI tracking 0000 and on the
+# unlabelled KITTI city-22 drive, then pcl_movers_viewer off-screen. Runs under xvfb-run when
+# there is no X display.
 #
 #   scripts/make_screenshots.sh BUILD_DIR [SHARED_DATA_DIR]
 #
@@ -32,4 +33,16 @@ if [[ -d "$kitti" ]]; then
   echo "wrote docs/images/viewer_kitti.png, docs/images/viewer_kitti_bird.png"
 else
   echo "KITTI data not found in $kitti: skipped the KITTI screenshots" >&2
+fi
+
+# 3. KITTI city-22 (real, unlabelled, no poses: pcl_movers_detect estimates them): frame 4.
+city="$shared/kitti-city-22"
+if [[ -d "$city" ]]; then
+  "$apps/pcl_movers_detect" "$city" "$work/city_det" --labelled-clouds >/dev/null
+  run_viewer "$city" --detections "$work/city_det" --frames 4 \
+    --size 1280x720 --camera chase --screenshot-dir "$work/city_chase" >/dev/null
+  cp "$work/city_chase/000004.png" "$images/viewer_city.png"
+  echo "wrote docs/images/viewer_city.png"
+else
+  echo "KITTI data not found in $city: skipped the city-22 screenshot" >&2
 fi
