@@ -12,6 +12,7 @@
 #endif
 #include <pcl_movers/range_image_region_growing.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -167,10 +168,10 @@ void MoverDetector<PointT>::process(const PointCloudConstPtr& scan, const Eigen:
   const PointCloudConstPtr organized = organize(scan);
   result.organized = organized;
   const std::size_t n = organized->size();
-  std::size_t finite = 0;
-  for (const auto& pt : organized->points)
-    finite += std::isfinite(pt.x) && std::isfinite(pt.y) && std::isfinite(pt.z);
-  if (finite == 0)
+  // Only whether there is one: stops at the first finite point instead of reading all ~140k.
+  if (std::none_of(organized->points.begin(), organized->points.end(), [](const PointT& pt) {
+        return std::isfinite(pt.x) && std::isfinite(pt.y) && std::isfinite(pt.z);
+      }))
     throw InputError("frame " + std::to_string(frame) + ": no finite point in the scan");
 
   // Ground removal: indices of the non-ground points.
