@@ -22,6 +22,7 @@
 #include <pcl_movers/sim/scenario.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
 #include <filesystem>
 #include <memory>
@@ -35,6 +36,14 @@ using Detector = pcl_movers::MoverDetector<Point>;
 
 int main(int argc, char** argv) {
   try {
+    double sector_deg = 180.0;
+    if (argc > 2) {
+      char* end = nullptr;
+      sector_deg = std::strtod(argv[2], &end);
+      if (end == argv[2] || *end != '\0' || !(sector_deg > 0.0 && sector_deg <= 180.0))
+        throw std::runtime_error(std::string("SECTOR_DEG must be a number in (0, 180], not '") +
+                                 argv[2] + "'");
+    }
     // The frames come from a folder or from the simulator; both give scan, pose and time.
     std::unique_ptr<pcl_movers::io::SequenceReader> reader;
     std::unique_ptr<pcl_movers::sim::LidarSimulator> simulator;
@@ -93,7 +102,7 @@ int main(int argc, char** argv) {
       truth = pcl_movers::io::readObjects(reader->objectsPath());
     if (truth.empty()) return 0;
     pcl_movers::eval::DetectionMetricsParams metrics;
-    metrics.sector_deg = argc > 2 ? std::stod(argv[2]) : 180.0;
+    metrics.sector_deg = sector_deg;
     const auto score = pcl_movers::eval::scoreDetections(truth, rows, metrics, poses, times);
     std::printf("\n%s", pcl_movers::eval::formatMarkdown(score).c_str());
     // Self-check on the bundled scene (it runs as a test): its movers are found most of the time
