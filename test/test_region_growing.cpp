@@ -82,6 +82,14 @@ std::size_t finiteCount(const Cloud& cloud) {
   return n;
 }
 
+/** Indices of the finite points: every return taken as an object point (no ground). */
+pcl::Indices finiteIndices(const Cloud& cloud) {
+  pcl::Indices indices;
+  for (std::size_t i = 0; i < cloud.size(); ++i)
+    if (std::isfinite(cloud[i].x)) indices.push_back(static_cast<int>(i));
+  return indices;
+}
+
 /** A box in front of the sensor at range `d`, and a second one 1 m further that starts where the
  * first one ends in azimuth (they touch in the range image). Sizes scale with d so both cover the
  * same image cells at any range. */
@@ -431,9 +439,7 @@ TEST(RangeImageRegionGrowing, OccludedSidesFlagTheSideBoundedByANearerObject) {
   const Cloud::Ptr cloud = rayCast(boxes);
   const auto clusters = segment(cloud);
   ASSERT_EQ(clusters.size(), 3u);
-  pcl::Indices objects;
-  for (std::size_t i = 0; i < cloud->size(); ++i)
-    if (std::isfinite((*cloud)[i].x)) objects.push_back(static_cast<int>(i));
+  const pcl::Indices objects = finiteIndices(*cloud);
   std::vector<std::uint8_t> sides;
   RangeImageRegionGrowing<pcl::PointXYZ>::occludedSides(*cloud, objects, clusters, 0.05f, 0.1f, 2,
                                                         true, 0.3f, sides);
@@ -471,9 +477,7 @@ TEST(RangeImageRegionGrowing, OccluderFloorsFindTheLowestPointOfTheNearerObjectB
   const Cloud::Ptr cloud = rayCast(boxes);
   const auto clusters = segment(cloud);  // the box cuts the wall in two
   ASSERT_GE(clusters.size(), 4u);
-  pcl::Indices objects;
-  for (std::size_t i = 0; i < cloud->size(); ++i)
-    if (std::isfinite((*cloud)[i].x)) objects.push_back(static_cast<int>(i));
+  const pcl::Indices objects = finiteIndices(*cloud);
   std::vector<int> floors;
   RangeImageRegionGrowing<pcl::PointXYZ>::occluderFloors(*cloud, objects, clusters, 0.05f, 0.1f, 2,
                                                          0.5f, floors);
@@ -518,9 +522,7 @@ TEST(RangeImageRegionGrowing, SharedCellLabelsGiveTheSameOcclusionAnswers) {
   const Cloud::Ptr cloud = rayCast(boxes);
   const auto clusters = segment(cloud);
   ASSERT_GE(clusters.size(), 4u);
-  pcl::Indices objects;
-  for (std::size_t i = 0; i < cloud->size(); ++i)
-    if (std::isfinite((*cloud)[i].x)) objects.push_back(static_cast<int>(i));
+  const pcl::Indices objects = finiteIndices(*cloud);
   std::vector<std::uint8_t> sides, shared_sides;
   std::vector<int> floors, shared_floors;
   RG::occludedSides(*cloud, objects, clusters, 0.05f, 0.1f, 2, true, 0.3f, sides);
