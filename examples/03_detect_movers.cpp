@@ -72,7 +72,7 @@ int main(int argc, char** argv) {
     for (std::size_t i = 0; i < frames; ++i) {
       Cloud::Ptr scan(new Cloud);
       Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-      double time = 0.1 * static_cast<double>(i);
+      double time = 0.0;  // from times.txt (or the rate) or the simulator, below
       if (reader) {
         reader->read(i, *scan);
         if (reader->hasPoses()) pose = reader->pose(i);
