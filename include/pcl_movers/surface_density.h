@@ -62,9 +62,9 @@ class SurfaceDensity {
   void setResolutionZ(float resolution_z) { resolution_z_ = resolution_z; }
   float getResolutionZ() const { return resolution_z_; }
 
-  /** \brief σ per metre of range from the sensor (default 0.005: the best of 0.0025-0.02 in the
-   * registration benchmark; the HDL-64E beam spacing is ~0.007 rad vertically, 0.003 rad
-   * horizontally). */
+  /** \brief σ per metre of range from the sensor (default 0.003: the best registration results
+   * on the simulated pairs, docs/registration.md; the HDL-64E beam spacing is ~0.007 rad
+   * vertically, 0.003 rad horizontally). */
   void setSigmaPerMetre(float sigma_per_metre) { sigma_per_metre_ = sigma_per_metre; }
   float getSigmaPerMetre() const { return sigma_per_metre_; }
   /** \brief Lower bound on σ [m] (default 0.1): keeps near points from becoming spikes. */
@@ -214,7 +214,7 @@ class SurfaceDensity {
   int nx_ = 0, ny_ = 0, nz_ = 0;
   float resolution_ = 0.2f;
   float resolution_z_ = 0.4f;
-  float sigma_per_metre_ = 0.005f;
+  float sigma_per_metre_ = 0.003f;
   float min_sigma_ = 0.1f;
   Eigen::Vector3f centre_ = Eigen::Vector3f::Zero();
   std::vector<float> data_;

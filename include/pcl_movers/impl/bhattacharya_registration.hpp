@@ -702,14 +702,20 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::search(
                        (nrz > 0 && (bdz == -nrz || bdz == nrz));
 
   // ---- sub-sample refinement (dims: x, y, z, yaw)
+  // The fits are made on log B: near its top B is close to a Gaussian of the offset (for two
+  // Gaussians of σ it is exp(-d²/8σ²)), which a quadratic in log B follows exactly however narrow
+  // the peak is against the cell, where a quadratic in B flattens narrow peaks and ridges
+  // (near objects, σ = half a cell; docs/design.md).
+  auto logB = [](float b) { return std::log(std::max(b, kLogFloor)); };
   const bool active[4] = {bdx > -nr && bdx<nr, bdy> - nr && bdy<nr, nrz> 0 && bdz > -nrz &&
                           bdz<nrz, layers> 1 && bl > 0 && bl < layers - 1};
   float offs[4] = {0.f, 0.f, 0.f, 0.f};
   float value = best;
   detail::refinePeak(
-      4, active, [&](const int* o) { return at(bl + o[3], bdz + o[2], bdy + o[1], bdx + o[0]); },
-      offs, &value);
-  value = std::min(std::max(value, best), 1.f);
+      4, active,
+      [&](const int* o) { return logB(at(bl + o[3], bdz + o[2], bdy + o[1], bdx + o[0])); }, offs,
+      &value);
+  value = std::min(std::max(std::exp(value), best), 1.f);
   float dx = static_cast<float>(bdx) + offs[0];
   float dy = static_cast<float>(bdy) + offs[1];
   float dz = static_cast<float>(bdz) + offs[2];
@@ -734,14 +740,15 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::search(
     detail::refinePeak(
         4, act,
         [&](const int* o) {
-          return w
-              .local[((static_cast<std::size_t>(o[3] + (rl - 1) / 2) * (2 * rz + 1) + (o[2] + rz)) *
-                          3 +
-                      (o[1] + 1)) *
-                         3 +
-                     (o[0] + 1)];
+          return logB(w.local[((static_cast<std::size_t>(o[3] + (rl - 1) / 2) * (2 * rz + 1) +
+                                (o[2] + rz)) *
+                                   3 +
+                               (o[1] + 1)) *
+                                  3 +
+                              (o[0] + 1)]);
         },
         u, &v);
+    v = std::exp(v);
     dx += u[0];
     dy += u[1];
     dz += u[2];
