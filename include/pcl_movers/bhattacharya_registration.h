@@ -300,7 +300,7 @@ class BhattacharyaRegistration : public pcl::Registration<PointSource, PointTarg
    * second pass after a smaller correction left success and median error unchanged at every
    * tolerance up to 0.1 (0.02 before: 6 % more time for the same results). */
   static constexpr float kRecentreTolerance = 0.05f;
-  /** Samples below this B enter the log-B peak fits as this value (no log of 0). */
+  /** Samples below this B enter the log-B peak fit as this value (no log of 0). */
   static constexpr float kLogFloor = 1e-6f;
 
   /** \brief The target's density: the one set with setTargetDensity(), or the one built from
