@@ -92,7 +92,8 @@ double millis(F&& f) {
   return pcl_movers_bench::threadCpuMs() - start;
 }
 
-void pclRangeImage(const Cloud& cloud, int columns, pcl::RangeImage& image) {
+template <typename PointT>
+void pclRangeImage(const pcl::PointCloud<PointT>& cloud, int columns, pcl::RangeImage& image) {
   // Same azimuth resolution as the organizer, vertical resolution of the mean beam spacing.
   const float ang_x = float(2 * M_PI) / float(columns);
   const float ang_y = pcl::deg2rad(27.f / 64.f);
@@ -206,20 +207,21 @@ struct Speed {
   double ours, theirs, ours_xyz, theirs_xyz;  ///< median thread CPU time per frame [ms]
 };
 
-/** Both methods on the same cloud, alternating, one frame after the other, over kPasses passes
- * of all frames; the first warms caches and the allocator, and per frame and method the fastest
- * of the others is kept (as bench_detector does: a short interruption by another process then
- * counts for neither, and both methods get the same treatment). */
-Speed measureSpeed(const std::vector<Cloud::Ptr>& clouds, int width) {
-  pcl_movers::RangeImageOrganizer<pcl::PointXYZI> organizer;
+/** Median over the frames of `RangeImageOrganizer` and of `pcl::RangeImage` (first, second)
+ * thread CPU time [ms]: both methods on the same cloud, alternating, one frame after the other,
+ * over kPasses passes of all frames; the first warms caches and the allocator, and per frame and
+ * method the fastest of the others is kept (as bench_detector does: a short interruption by
+ * another process then counts for neither, and both methods get the same treatment). */
+template <typename PointT>
+std::pair<double, double> medianFastestTimes(
+    const std::vector<typename pcl::PointCloud<PointT>::Ptr>& clouds, int width) {
+  pcl_movers::RangeImageOrganizer<PointT> organizer;
   organizer.setSensorModel(pcl_movers::SensorModel::hdl64());
-  std::vector<double> ours_ms, pcl_ms;
-  Cloud out;
+  pcl::PointCloud<PointT> out;
   pcl::RangeImage image;
   constexpr int kPasses = 4;
   const double inf = std::numeric_limits<double>::infinity();
-  ours_ms.assign(clouds.size(), inf);
-  pcl_ms.assign(clouds.size(), inf);
+  std::vector<double> ours_ms(clouds.size(), inf), pcl_ms(clouds.size(), inf);
   for (int pass = 0; pass < kPasses; ++pass)
     for (std::size_t f = 0; f < clouds.size(); ++f) {
       organizer.setInputCloud(clouds[f]);
@@ -230,34 +232,19 @@ Speed measureSpeed(const std::vector<Cloud::Ptr>& clouds, int width) {
         pcl_ms[f] = std::min(pcl_ms[f], b);
       }
     }
+  return {median(ours_ms), median(pcl_ms)};
+}
+
+Speed measureSpeed(const std::vector<Cloud::Ptr>& clouds, int width) {
+  const auto [ours, theirs] = medianFastestTimes<pcl::PointXYZI>(clouds, width);
   // The same with PointXYZ (16-byte points: half the image to write).
-  std::vector<double> ours_xyz_ms, pcl_xyz_ms;
   std::vector<pcl::PointCloud<pcl::PointXYZ>::Ptr> xyz;
   for (const auto& c : clouds) {
     xyz.emplace_back(new pcl::PointCloud<pcl::PointXYZ>);
     pcl::copyPointCloud(*c, *xyz.back());
   }
-  pcl_movers::RangeImageOrganizer<pcl::PointXYZ> o;
-  o.setSensorModel(pcl_movers::SensorModel::hdl64());
-  pcl::PointCloud<pcl::PointXYZ> out_xyz;
-  ours_xyz_ms.assign(xyz.size(), inf);
-  pcl_xyz_ms.assign(xyz.size(), inf);
-  for (int pass = 0; pass < kPasses; ++pass)
-    for (std::size_t f = 0; f < xyz.size(); ++f) {
-      o.setInputCloud(xyz[f]);
-      const double a = millis([&] { o.organize(out_xyz); });
-      const double b = millis([&] {
-        image.createFromPointCloud(*xyz[f], float(2 * M_PI) / float(width),
-                                   pcl::deg2rad(27.f / 64.f), pcl::deg2rad(360.f),
-                                   pcl::deg2rad(60.f), Eigen::Affine3f::Identity(),
-                                   pcl::RangeImage::LASER_FRAME, 0.f, 0.f, 0);
-      });
-      if (pass > 0) {
-        ours_xyz_ms[f] = std::min(ours_xyz_ms[f], a);
-        pcl_xyz_ms[f] = std::min(pcl_xyz_ms[f], b);
-      }
-    }
-  return {median(ours_ms), median(pcl_ms), median(ours_xyz_ms), median(pcl_xyz_ms)};
+  const auto [ours_xyz, theirs_xyz] = medianFastestTimes<pcl::PointXYZ>(xyz, width);
+  return {ours, theirs, ours_xyz, theirs_xyz};
 }
 
 /** Only the speed comparison, `repeats` times (quick side-by-side checks while optimizing). */
