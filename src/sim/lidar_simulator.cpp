@@ -4,6 +4,7 @@
 #include <pcl_movers/io/ground_truth.h>
 #include <pcl_movers/io/sequence.h>
 #include <pcl_movers/sim/lidar_simulator.h>
+#include <pcl_movers/sim/scene_families.h>
 
 #include <algorithm>
 #include <cmath>
@@ -844,7 +845,12 @@ void LidarSimulator::simulate(int frame, pcl::PointCloud<pcl::PointXYZI>& cloud,
     sin_el[r] = std::sin(double(sensor_.elevations()[r]));
   }
   const std::uint64_t seed = scenario_.seed;
-  for (int col = 0; col < cols; ++col) {
+  // A blind frame (covered sensor, lost packets) has no return at all; its objects get 0 points.
+  const bool blind =
+      std::binary_search(scenario_.blind_frames.begin(), scenario_.blind_frames.end(), frame);
+  if (blind)
+    for (pcl::PointXYZI& pt : cloud.points) pt.x = pt.y = pt.z = nan;
+  for (int col = 0; col < (blind ? 0 : cols); ++col) {
     const double az = sensor_.azimuthOf(col);
     const double ca = std::cos(az), sa = std::sin(az);
     const std::vector<int>& cand = column_objects[col];
@@ -1000,6 +1006,10 @@ void writeSequence(const LidarSimulator& sim, const std::string& folder, bool ov
     if (!src.empty() && fs::exists(src, ec)) {
       fs::copy_file(src, tmp / "scenario.yaml", fs::copy_options::overwrite_existing, ec);
       if (ec) throw InputError(src, 0, "cannot copy scenario: " + ec.message());
+    } else {  // a generated scene: its plain scenario file, which reproduces it
+      std::ofstream yaml(tmp / "scenario.yaml");
+      yaml << toYaml(sim.getScenario());
+      if (!yaml) throw InputError((tmp / "scenario.yaml").string(), 0, "cannot write");
     }
     fs::remove(tmp / ".pcl_movers_write_probe", ec);
   } catch (...) {

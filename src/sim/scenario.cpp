@@ -29,6 +29,8 @@ Trajectory::Trajectory(const TrajectorySpec& spec, double horizon) {
   s.speed = spec.speed;
   std::size_t seg = 0;
   double seg_start = 0, seg_start_speed = spec.speed;
+  // After the last segment the motion goes on as in it (forwards or reversing).
+  const bool final_reverse = !spec.segments.empty() && spec.segments.back().reverse;
   for (std::size_t k = 0; k < n; ++k) {
     const double t = double(k) * kStep;
     while (seg < spec.segments.size() && t >= seg_start + spec.segments[seg].duration - 1e-9) {
@@ -44,19 +46,27 @@ Trajectory::Trajectory(const TrajectorySpec& spec, double horizon) {
       accel = (target - seg_start_speed) / g.duration;
       // Re-anchor the speed to the segment's ramp to avoid drift from repeated additions.
       s.speed = seg_start_speed + accel * (t - seg_start);
+      s.reverse = g.reverse;
     } else {
       s.speed = seg_start_speed;
+      s.reverse = final_reverse;
     }
     samples_.push_back(s);
     turn_rates_.push_back(turn);
     accels_.push_back(accel);
-    // Midpoint step: heading is exact (constant rate), speed exact (linear ramp).
-    const double mid_heading = s.heading + 0.5 * kStep * turn;
-    const double mid_speed = std::max(0.0, s.speed + 0.5 * kStep * accel);
-    s.position += kStep * mid_speed * Eigen::Vector2d(std::cos(mid_heading), std::sin(mid_heading));
-    s.heading += kStep * turn;
-    s.speed = std::max(0.0, s.speed + kStep * accel);
+    s = step(s, kStep, turn, accel);
   }
+}
+
+Trajectory::State Trajectory::step(const State& s, double dt, double turn, double accel) {
+  // Midpoint step: heading is exact (constant rate), speed exact (linear ramp).
+  const double mid_heading = s.heading + 0.5 * dt * turn + (s.reverse ? M_PI : 0.0);
+  const double mid_speed = std::max(0.0, s.speed + 0.5 * dt * accel);
+  State out = s;
+  out.position += dt * mid_speed * Eigen::Vector2d(std::cos(mid_heading), std::sin(mid_heading));
+  out.heading = s.heading + dt * turn;
+  out.speed = std::max(0.0, s.speed + dt * accel);
+  return out;
 }
 
 Trajectory::State Trajectory::at(double t) const {
@@ -70,20 +80,11 @@ Trajectory::State Trajectory::at(double t) const {
     turn = turn_rates_[k];
     accel = accels_[k];
   }
-  const State& s = samples_[k];
-  const double dt = t - double(k) * kStep;
   if (k == samples_.size() - 1) {
     turn = 0;
     accel = 0;
   }
-  State out;
-  const double mid_heading = s.heading + 0.5 * dt * turn;
-  const double mid_speed = std::max(0.0, s.speed + 0.5 * dt * accel);
-  out.position =
-      s.position + dt * mid_speed * Eigen::Vector2d(std::cos(mid_heading), std::sin(mid_heading));
-  out.heading = s.heading + dt * turn;
-  out.speed = std::max(0.0, s.speed + dt * accel);
-  return out;
+  return step(samples_[k], t - double(k) * kStep, turn, accel);
 }
 
 // ------------------------------------------------------------------ parsing
@@ -149,6 +150,15 @@ class Fields {
                        "'" + keyPath(key) + "': must be " + (allow_zero ? "≥ 0" : "positive") +
                            ", got " + n->scalar);
     return v;
+  }
+  bool flag(const std::string& key, bool fallback) {
+    const YamlNode* n = get(key);
+    if (!n) return fallback;
+    if (n->isScalar() && !n->quoted) {
+      if (n->scalar == "true" || n->scalar == "1") return true;
+      if (n->scalar == "false" || n->scalar == "0") return false;
+    }
+    throw InputError(file_, n->line, "'" + keyPath(key) + "': expected true or false");
   }
   std::string text(const std::string& key, const std::string& fallback) {
     const YamlNode* n = get(key);
@@ -222,6 +232,7 @@ TrajectorySpec readTrajectory(Fields& f, bool mover) {
                          "'" + s.keyPath("duration") + "': must be positive, got " + d.scalar);
       g.speed = s.positive("speed", -1.0, true);
       g.turn_rate = s.number("turn_rate", 0.0) * kDeg;
+      g.reverse = s.flag("reverse", false);
       s.finish();
       t.segments.push_back(g);
     }
@@ -401,6 +412,20 @@ Scenario parseScenario(const std::string& text, const std::string& file) {
       f.finish();
       sc.clutter.push_back(c);
     }
+  }
+  if (const YamlNode* n = top.get("blind_frames")) {
+    if (!n->isSequence()) throw InputError(file, n->line, "'blind_frames': expected a list");
+    for (const YamlNode& e : n->sequence) {
+      const double v = top.number(e, "blind_frames");
+      if (v < 0 || v != std::floor(v) || v >= sc.frames)
+        throw InputError(file, e.line,
+                         "'blind_frames': expected frame numbers in [0, " +
+                             std::to_string(sc.frames - 1) + "], got " + e.scalar);
+      sc.blind_frames.push_back(static_cast<int>(v));
+    }
+    std::sort(sc.blind_frames.begin(), sc.blind_frames.end());
+    sc.blind_frames.erase(std::unique(sc.blind_frames.begin(), sc.blind_frames.end()),
+                          sc.blind_frames.end());
   }
   top.finish();
   return sc;

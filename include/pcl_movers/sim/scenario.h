@@ -20,6 +20,9 @@ struct TrajectorySegment {
   double duration = 0;   ///< [s], > 0
   double speed = -1;     ///< speed at the end of the segment [m/s]; < 0 keeps the current speed
   double turn_rate = 0;  ///< [rad/s], positive = left (counter-clockwise seen from above)
+  /** \brief Drive backwards: the body keeps its heading and moves the other way (a car
+   * reversing out of a parking slot). The turn rate still turns the body. */
+  bool reverse = false;
 };
 
 /** \brief Start state plus segments; after the last segment the motion continues straight at the
@@ -37,8 +40,9 @@ class Trajectory {
  public:
   struct State {
     Eigen::Vector2d position = Eigen::Vector2d::Zero();
-    double heading = 0;
-    double speed = 0;
+    double heading = 0;  ///< where the body points [rad]
+    double speed = 0;    ///< along the heading, or against it while reversing [m/s]
+    bool reverse = false;
   };
   Trajectory() = default;
   /** \param horizon seconds to integrate (sampling later times extrapolates straight). */
@@ -47,6 +51,8 @@ class Trajectory {
 
  private:
   static constexpr double kStep = 0.01;
+  /** State after `dt` seconds at a constant turn rate and acceleration. */
+  static State step(const State& s, double dt, double turn, double accel);
   std::vector<State> samples_;
   std::vector<double> turn_rates_;  // turn rate and acceleration in force after each sample
   std::vector<double> accels_;
@@ -117,6 +123,9 @@ struct Scenario {
   TrajectorySpec ego;
   std::vector<ObjectSpec> objects;
   std::vector<ClutterSpec> clutter;
+  /** \brief Frames with no return at all (a covered sensor, a dropped batch of packets): their
+   * scans are all NaN, their objects have 0 points. Sorted, unique. */
+  std::vector<int> blind_frames;
 };
 
 /** \brief Reads and validates a scenario file. Throws InputError "file:line: reason" naming the
