@@ -5,6 +5,7 @@
  */
 #include <pcl_movers/common.h>
 #include <pcl_movers/eval/detection_metrics.h>
+#include <pcl_movers/eval/kitti_dont_care.h>
 
 #include <gtest/gtest.h>
 
@@ -13,7 +14,10 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <memory>
 #include <string>
+#include <vector>
 
 namespace fs = std::filesystem;
 using pcl_movers::eval::DetectionMetricsParams;
@@ -385,4 +389,72 @@ TEST(DetectionMetrics, FirstReportedCountsLabelledFramesOutsideTheScoredSector) 
   tracks.clear();
   s = scoreDetections(objects, tracks);
   EXPECT_EQ(s.targets[0].first_reported, -1);
+}
+
+// ------------------------------------------------------------------ KITTI DontCare regions
+namespace {
+
+/** A camera looking along the sensor's +x: (x, y, z) -> pixel (50 - 100 y/x, 50 - 100 z/x). */
+pcl_movers::eval::KittiCalibration forwardCamera() {
+  pcl_movers::eval::KittiCalibration c;
+  c.tr_velo_cam << 0, -1, 0, 0, 0, 0, -1, 0, 1, 0, 0, 0;
+  c.r0_rect.setIdentity();
+  c.p2 << 100, 0, 50, 0, 0, 100, 50, 0, 0, 0, 1, 0;
+  return c;
+}
+
+/** DontCare box of frame 0 around pixel (60, 50), where the sensor point (10, -1, z≈0) lands. */
+std::shared_ptr<const pcl_movers::eval::DontCareRegions> dontCareAhead() {
+  return std::make_shared<const pcl_movers::eval::DontCareRegions>(
+      forwardCamera(),
+      std::map<int, std::vector<pcl_movers::eval::ImageBox>>{{0, {{55, 40, 65, 60}}}});
+}
+
+}  // namespace
+
+TEST(DetectionMetrics, RowInADontCareBoxIsNeitherHitNorFalseAlarm) {
+  // A target at (30, 8) in frames 0-1; mover rows: (10, -1) in frame 0's DontCare box, (10, 3)
+  // outside it (pixel (20, 49)), (10, -1) again in frame 1 (no DontCare box there), and (-10, 1)
+  // behind the camera: its pixel would be (60, 51) inside the box if the depth sign were ignored.
+  std::vector<GroundTruthObject> objects = {object(0, 1, 30, 8, true), object(1, 1, 30, 8, true)};
+  std::vector<TrackRow> tracks = {row(0, 5, 10, -1), row(0, 6, 10, 3), row(1, 5, 10, -1),
+                                  row(0, 7, -10, 1)};
+  DetectionMetricsParams p;
+  p.sector_deg = 180;
+  const auto counted = scoreDetections(objects, tracks, p);
+  EXPECT_FALSE(counted.dont_care_used);
+  EXPECT_EQ(counted.false_alarms, 4);
+  EXPECT_EQ(counted.dont_care_ignored, 0);
+
+  p.dont_care = dontCareAhead();
+  const auto s = scoreDetections(objects, tracks, p);
+  EXPECT_TRUE(s.dont_care_used);
+  EXPECT_EQ(s.dont_care_ignored, 1);
+  EXPECT_EQ(s.false_alarms, 3);
+  EXPECT_EQ(s.mover_rows_in_sector, 4);
+  EXPECT_EQ(s.targets[0].hits, 0);
+  EXPECT_NEAR(s.false_alarms_per_frame, 1.5, 1e-12);
+  EXPECT_NE(pcl_movers::eval::formatMarkdown(s).find("1 rows in KITTI DontCare regions ignored"),
+            std::string::npos);
+  const std::string js = pcl_movers::eval::formatJson(s);
+  EXPECT_NE(js.find("\"dont_care\": true"), std::string::npos) << js;
+  EXPECT_NE(js.find("\"dont_care_ignored\": 1"), std::string::npos) << js;
+  EXPECT_NE(pcl_movers::eval::formatJson(counted).find("\"dont_care\": false"), std::string::npos);
+}
+
+TEST(DetectionMetrics, DontCareNeverTakesAHitNorExcusesALabelledStaticObject) {
+  // KITTI's devkit matches detections to labelled objects first: a row on a target whose centre
+  // projects into a DontCare box (the box overlaps the target in the image) stays a hit, and a
+  // parked car declared moving stays a false alarm.
+  DetectionMetricsParams p;
+  p.dont_care = dontCareAhead();
+  std::vector<GroundTruthObject> objects = {object(0, 1, 10, -1, true)};
+  const auto hit = scoreDetections(objects, {row(0, 5, 10, -1)}, p);
+  EXPECT_EQ(hit.targets[0].hits, 1);
+  EXPECT_EQ(hit.dont_care_ignored, 0);
+  objects[0].moving = false;
+  const auto parked = scoreDetections(objects, {row(0, 5, 10, -1)}, p);
+  EXPECT_EQ(parked.false_alarms, 1);
+  EXPECT_EQ(parked.false_alarms_on_static_objects, 1);
+  EXPECT_EQ(parked.dont_care_ignored, 0);
 }
