@@ -458,3 +458,82 @@ TEST(DetectionMetrics, DontCareNeverTakesAHitNorExcusesALabelledStaticObject) {
   EXPECT_EQ(parked.false_alarms_on_static_objects, 1);
   EXPECT_EQ(parked.dont_care_ignored, 0);
 }
+
+TEST(EvalTool, DontCareFlagsAndErrors) {
+  if (!fs::exists(toolPath())) GTEST_SKIP() << "pcl_movers_eval not built at " << toolPath();
+  const fs::path dir = fs::temp_directory_path() / "pcl_movers_eval_dontcare_test";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  writeFile(dir / "objects.txt", "0 0 Van 30 8 0 4 2 2 0 1 5 100\n");
+  // One mover row at (10, -1, 0): pixel (60, 50) with the calib below, in the DontCare box.
+  writeFile(dir / "tracks.csv",
+            "frame,time,track_id,mover,x,y,z,wx,wy,wz,vx,vy,speed,length,width,height,yaw,"
+            "similarity,points\n0,0,3,1,10,-1,0,10,-1,0,5,0,5,4,2,2,0,0.9,80\n");
+  writeFile(dir / "calib.txt",
+            "P2: 100 0 50 0 0 100 50 0 0 0 1 0\nR0_rect: 1 0 0 0 1 0 0 0 1\n"
+            "Tr_velo_cam: 0 -1 0 0 0 0 -1 0 1 0 0 0\n");
+  writeFile(dir / "labels.txt",
+            "0 -1 DontCare -1 -1 -10 55 40 65 60 -1000 -1000 -1000 -10 -1 -1 -1\n");
+  const std::string base = (dir / "objects.txt").string() + " " + (dir / "tracks.csv").string();
+  const std::string flags =
+      " --dontcare " + (dir / "labels.txt").string() + " --calib " + (dir / "calib.txt").string();
+  std::string out;
+  ASSERT_EQ(runTool(base + flags + " --json " + (dir / "s.json").string(), &out), 0) << out;
+  EXPECT_NE(out.find("0 in 1 frames, 0 on static objects; 1 rows in KITTI DontCare regions "
+                     "ignored"),
+            std::string::npos)
+      << out;
+  std::ifstream json(dir / "s.json");
+  const std::string js((std::istreambuf_iterator<char>(json)), std::istreambuf_iterator<char>());
+  EXPECT_NE(js.find("\"dont_care_ignored\": 1"), std::string::npos) << js;
+  ASSERT_EQ(runTool(base, &out), 0) << out;  // no regions: the row is a false alarm
+  EXPECT_NE(out.find("(1 in 1 frames, 0 on static objects)"), std::string::npos) << out;
+
+  // One of the pair, contradicting switches, malformed files: non-zero exit naming the problem.
+  EXPECT_NE(runTool(base + " --dontcare " + (dir / "labels.txt").string(), &out), 0);
+  EXPECT_NE(out.find("--dontcare needs --calib"), std::string::npos) << out;
+  EXPECT_NE(runTool(base + flags + " --no-dontcare", &out), 0);
+  EXPECT_NE(out.find("--no-dontcare contradicts"), std::string::npos) << out;
+  writeFile(dir / "bad_calib.txt", "P2: 100 0 50\n");
+  EXPECT_NE(runTool(base + " --dontcare " + (dir / "labels.txt").string() + " --calib " +
+                        (dir / "bad_calib.txt").string(),
+                    &out),
+            0);
+  EXPECT_NE(out.find("bad_calib.txt:1: P2: expected 12 numbers"), std::string::npos) << out;
+  writeFile(dir / "bad_labels.txt", "0 -1 DontCare -1 -1 -10 55 40 65\n");
+  EXPECT_NE(runTool(base + " --dontcare " + (dir / "bad_labels.txt").string() + " --calib " +
+                        (dir / "calib.txt").string(),
+                    &out),
+            0);
+  EXPECT_NE(out.find("bad_labels.txt:1: expected 17 or 18 columns"), std::string::npos) << out;
+  fs::remove_all(dir);
+}
+
+// With --sequence on the real KITTI folder its labels and calib are used by default (said on
+// stderr); --no-dontcare counts the row in frame 0's DontCare box as a false alarm again.
+TEST(EvalTool, SequenceFolderDontCareByDefault) {
+  if (!fs::exists(toolPath())) GTEST_SKIP() << "pcl_movers_eval not built at " << toolPath();
+  const std::string seq = std::string(PCL_MOVERS_SHARED_DATA) + "/kitti-tracking-0000-a";
+  if (!fs::exists(seq + "/labels_kitti_tracking.txt"))
+    GTEST_SKIP() << "KITTI data not found at " << seq << " (set PCL_MOVERS_SHARED_DATA)";
+  const fs::path dir = fs::temp_directory_path() / "pcl_movers_eval_dontcare_seq_test";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  // (26.602, 13.848, -0.733) projects into frame 0's DontCare box (232, 202.5); no label there.
+  writeFile(dir / "tracks.csv",
+            "frame,time,track_id,mover,x,y,z,wx,wy,wz,vx,vy,speed,length,width,height,yaw,"
+            "similarity,points\n0,0,3,1,26.602,13.848,-0.733,0,0,0,5,0,5,4,2,2,0,0.9,80\n");
+  const std::string base =
+      seq + "/objects.txt " + (dir / "tracks.csv").string() + " --sequence " + seq;
+  std::string out;
+  ASSERT_EQ(runTool(base, &out), 0) << out;
+  EXPECT_NE(out.find("DontCare: 122 KITTI DontCare boxes from " + seq), std::string::npos) << out;
+  EXPECT_NE(out.find("| false alarms / frame | 0.0000 (0 in 77 frames, 0 on static objects; 1 "
+                     "rows in KITTI DontCare regions ignored) |"),
+            std::string::npos)
+      << out;
+  ASSERT_EQ(runTool(base + " --no-dontcare", &out), 0) << out;
+  EXPECT_EQ(out.find("DontCare"), std::string::npos) << out;
+  EXPECT_NE(out.find("(1 in 77 frames, 0 on static objects) |"), std::string::npos) << out;
+  fs::remove_all(dir);
+}
