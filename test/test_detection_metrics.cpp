@@ -459,6 +459,39 @@ TEST(DetectionMetrics, DontCareNeverTakesAHitNorExcusesALabelledStaticObject) {
   EXPECT_EQ(parked.dont_care_ignored, 0);
 }
 
+// ------------------------------------------------------------------ "why missed" diagnostics
+TEST(DetectionMetrics, TrackedFramesFirstTrackedAndMedianSpeed) {
+  // Target 4 in frames 0-9, too sparse to be visible in frames 0 and 1, speed_mps = frame number.
+  // Any row (mover or not) on its grown box counts as tracked: a non-mover row in frames 1-9
+  // except 5, where the row is 3 m beside the box; movers from frame 7.
+  std::vector<GroundTruthObject> objects;
+  std::vector<TrackRow> tracks;
+  for (int f = 0; f < 10; ++f) {
+    objects.push_back(object(f, 4, 20.0, 0.0, true, f < 2 ? 5 : 100));
+    objects.back().speed = f;
+    if (f >= 1) tracks.push_back(row(f, 8, 20.4, f == 5 ? 4.5 : 0.3, f >= 7));
+  }
+  objects.push_back(object(0, 9, 40.0, 0.0, true, 5));  // never visible
+  const auto s = scoreDetections(objects, tracks);
+  ASSERT_EQ(s.targets.size(), 2u);
+  const auto& t = s.targets[0];
+  EXPECT_EQ(t.visible_frames, 8);
+  EXPECT_EQ(t.tracked_frames, 7);  // frames 2-9 but 5; frame 1 is not visible
+  EXPECT_EQ(t.first_tracked, 2);
+  EXPECT_EQ(t.hits, 3);
+  EXPECT_NEAR(t.median_speed, 5.5, 1e-12);  // median of 2..9
+  EXPECT_EQ(s.targets[1].tracked_frames, 0);
+  EXPECT_EQ(s.targets[1].first_tracked, -1);
+  EXPECT_TRUE(std::isnan(s.targets[1].median_speed));
+  const std::string js = pcl_movers::eval::formatJson(s);
+  EXPECT_NE(js.find("\"tracked_frames\": 7, \"first_tracked\": 2, \"median_speed\": 5.500"),
+            std::string::npos)
+      << js;
+  EXPECT_NE(js.find("\"tracked_frames\": 0, \"first_tracked\": -1, \"median_speed\": null"),
+            std::string::npos)
+      << js;
+}
+
 TEST(EvalTool, DontCareFlagsAndErrors) {
   if (!fs::exists(toolPath())) GTEST_SKIP() << "pcl_movers_eval not built at " << toolPath();
   const fs::path dir = fs::temp_directory_path() / "pcl_movers_eval_dontcare_test";

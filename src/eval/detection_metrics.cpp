@@ -148,7 +148,7 @@ DetectionScore scoreDetections(const std::vector<io::GroundTruthObject>& objects
 
   // Index everything by frame.
   ObjectsByFrame objects_by_frame;
-  RowsByFrame movers_by_frame;
+  RowsByFrame movers_by_frame, rows_by_frame;
   std::set<int> frames;
   for (const auto& o : objects) {
     objects_by_frame[o.frame].push_back(&o);
@@ -156,6 +156,7 @@ DetectionScore scoreDetections(const std::vector<io::GroundTruthObject>& objects
   }
   for (const auto& r : tracks) {
     frames.insert(r.frame);
+    rows_by_frame[r.frame].push_back(&r);
     if (r.mover) movers_by_frame[r.frame].push_back(&r);
   }
   score.frames = params.frames > 0 ? params.frames : static_cast<int>(frames.size());
@@ -182,12 +183,14 @@ DetectionScore scoreDetections(const std::vector<io::GroundTruthObject>& objects
     }
   }
 
-  std::map<int, std::vector<double>> squared_errors;
+  std::map<int, std::vector<double>> squared_errors, visible_speeds;
   static const std::vector<const io::TrackRow*> kNone;
   for (const auto& frame_objects : objects_by_frame) {
     const int frame = frame_objects.first;
     const auto mit = movers_by_frame.find(frame);
     const auto& movers = mit == movers_by_frame.end() ? kNone : mit->second;
+    const auto rit = rows_by_frame.find(frame);
+    const auto& rows = rit == rows_by_frame.end() ? kNone : rit->second;
     for (const auto* o : frame_objects.second) {
       if (!o->moving) continue;
       auto& t = targets[o->track_id];
@@ -202,6 +205,11 @@ DetectionScore scoreDetections(const std::vector<io::GroundTruthObject>& objects
       const bool moving_now = o->speed >= params.moving_speed;
       if (moving_now) ++t.moving_frames;
       if (t.first_visible < 0) t.first_visible = frame;
+      visible_speeds[o->track_id].push_back(o->speed);
+      if (anyRowIn(*o, rows, params)) {
+        ++t.tracked_frames;
+        if (t.first_tracked < 0) t.first_tracked = frame;
+      }
       // The hitting row nearest the box centre carries the velocity estimate we score.
       const io::TrackRow* best = nullptr;
       double best_d = std::numeric_limits<double>::infinity();
@@ -239,6 +247,7 @@ DetectionScore scoreDetections(const std::vector<io::GroundTruthObject>& objects
   for (auto& kv : targets) {
     auto& t = kv.second;
     const auto& sq = squared_errors[t.track_id];
+    t.median_speed = median(visible_speeds[t.track_id]);
     t.velocity_samples = static_cast<int>(sq.size());
     if (!sq.empty()) {
       double s = 0;
@@ -350,6 +359,9 @@ std::string formatJson(const DetectionScore& score) {
         << ", \"velocity_samples\": " << t.velocity_samples
         << ", \"first_reported\": " << t.first_reported
         << ", \"first_reported_visible\": " << (t.first_reported_visible ? "true" : "false")
+        << ", \"tracked_frames\": " << t.tracked_frames
+        << ", \"first_tracked\": " << t.first_tracked
+        << ", \"median_speed\": " << jsonNumber(t.median_speed, 3)
         << ", \"extra_moving_frames\": " << t.moving_frames
         << ", \"extra_moving_hit_rate\": " << jsonNumber(t.movingHitRate()) << "}";
   }

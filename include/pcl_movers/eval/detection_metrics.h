@@ -75,6 +75,14 @@ struct TargetScore {
    * target's speed >= moving_speed, and the hits among them. */
   int moving_frames = 0;
   int moving_hits = 0;
+  /** \brief Diagnostic: visible frames in which some row of tracks.csv, mover or not, has its
+   * centroid in the target's grown box (the target was segmented and tracked as an object). */
+  int tracked_frames = 0;
+  /** \brief Diagnostic: first visible frame counted in tracked_frames; -1 when never. */
+  int first_tracked = -1;
+  /** \brief Median of the target's objects.txt `speed_mps` over its visible frames [m/s]; NaN
+   * when never visible. */
+  double median_speed = std::numeric_limits<double>::quiet_NaN();
   double movingHitRate() const {
     return moving_frames > 0 ? double(moving_hits) / moving_frames
                              : std::numeric_limits<double>::quiet_NaN();
