@@ -5,6 +5,7 @@
  * SPDX-License-Identifier: BSD-3-Clause
  */
 #include <pcl_movers/eval/detection_metrics.h>
+#include <pcl_movers/eval/kitti_dont_care.h>
 #include <pcl_movers/io/ground_truth.h>
 #include <pcl_movers/io/sequence.h>
 #include <pcl_movers/io/tracks.h>
@@ -21,6 +22,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <memory>
 #include <sstream>
 
 #include "tool_utils.h"
@@ -30,8 +32,15 @@ using pcl_movers::InputError;
 
 namespace {
 
+/** KITTI files a --sequence folder may hold; their DontCare regions are then used by default. */
+const char* const kSequenceLabels = "labels_kitti_tracking.txt";
+const char* const kSequenceCalib = "calib.txt";
+
 struct Options {
   pcl_movers::eval::DetectionMetricsParams metrics;
+  std::string dont_care_path;
+  std::string calib_path;
+  bool no_dont_care = false;
   std::string poses_path;
   std::string times_path;
   std::string sequence;
@@ -67,7 +76,15 @@ void printHelp(const char* argv0) {
       "  --frames N       sequence length for false alarms per frame (default: the sequence's\n"
       "                   length with --sequence, else the number of distinct frames in\n"
       "                   OBJECTS and TRACKS, which can only undercount)\n"
-      "  --sequence DIR   sequence folder: its length, poses.txt and times.txt are used\n"
+      "  --sequence DIR   sequence folder: its length, poses.txt and times.txt are used, and\n"
+      "                   when it holds %s and %s, their DontCare\n"
+      "                   regions (as --dontcare and --calib; said on stderr)\n"
+      "  --dontcare FILE  KITTI tracking label file: a mover row whose centroid projects into a\n"
+      "                   DontCare box of its frame, and lies in no labelled box, is ignored\n"
+      "                   (neither hit nor false alarm, as in KITTI's benchmark); needs --calib\n"
+      "  --calib FILE     KITTI calib file (P2, R0_rect, Tr_velo_cam) for --dontcare\n"
+      "  --no-dontcare    count the rows in DontCare regions as false alarms\n"
+      "                   (default: %s)\n"
       "  --poses FILE     sensor->world poses (KITTI format) for velocity vectors\n"
       "  --times FILE     timestamps per frame (default 10 Hz)\n"
       "  --png FILE       write a hit-%% per target bar chart\n"
@@ -76,7 +93,8 @@ void printHelp(const char* argv0) {
       "  --overwrite      replace existing --png/--json files\n"
       "  -h, --help       this help\n",
       argv0, d.metrics.velocity_half_window, d.metrics.moving_speed, d.metrics.sector_deg,
-      d.metrics.min_points, d.metrics.grow_xy, d.metrics.grow_z, d.title.c_str());
+      d.metrics.min_points, d.metrics.grow_xy, d.metrics.grow_z, kSequenceLabels, kSequenceCalib,
+      d.no_dont_care ? "counted" : "ignored when available", d.title.c_str());
 }
 
 using pcl_movers::tools::parseNumber;
@@ -145,11 +163,43 @@ void writePng(const std::string& path, const pcl_movers::eval::DetectionScore& s
   });
 }
 
+/** The DontCare regions to apply: --dontcare/--calib, else the --sequence folder's KITTI files;
+ * none with --no-dontcare. */
+std::shared_ptr<const pcl_movers::eval::DontCareRegions> loadDontCare(const Options& opt) {
+  const bool given = !opt.dont_care_path.empty() || !opt.calib_path.empty();
+  if (opt.no_dont_care) {
+    if (given) throw InputError("--no-dontcare contradicts --dontcare/--calib");
+    return nullptr;
+  }
+  if (given && (opt.dont_care_path.empty() || opt.calib_path.empty()))
+    throw InputError(opt.dont_care_path.empty() ? "--calib needs --dontcare LABELS"
+                                                : "--dontcare needs --calib CALIB");
+  std::string labels = opt.dont_care_path, calib = opt.calib_path;
+  if (!given && !opt.sequence.empty()) {
+    const fs::path dir(opt.sequence);
+    if (!fs::is_regular_file(dir / kSequenceLabels) || !fs::is_regular_file(dir / kSequenceCalib))
+      return nullptr;
+    labels = (dir / kSequenceLabels).string();
+    calib = (dir / kSequenceCalib).string();
+  }
+  if (labels.empty()) return nullptr;
+  for (const auto& p : {labels, calib})
+    if (!fs::is_regular_file(p)) throw InputError(p + ": no such file");
+  auto regions = std::make_shared<const pcl_movers::eval::DontCareRegions>(
+      pcl_movers::eval::DontCareRegions::fromFiles(labels, calib));
+  pcl::console::print_info(
+      stderr, "DontCare: %zu KITTI DontCare boxes from %s (calib %s); rows there are ignored%s\n",
+      regions->size(), labels.c_str(), calib.c_str(),
+      given ? "" : " (--no-dontcare to count them)");
+  return regions;
+}
+
 int run(int argc, char** argv) {
   const std::vector<std::string> with_value = {
-      "--sector-deg", "--min-points", "--grow", "--grow-z", "--frames", "--sequence",
-      "--poses",      "--times",      "--png",  "--title",  "--json"};
-  pcl_movers::tools::checkArguments(argc, argv, {"-h", "--help", "--overwrite"}, with_value);
+      "--sector-deg", "--min-points", "--grow",  "--grow-z", "--frames",   "--sequence", "--poses",
+      "--times",      "--png",        "--title", "--json",   "--dontcare", "--calib"};
+  pcl_movers::tools::checkArguments(argc, argv, {"-h", "--help", "--overwrite", "--no-dontcare"},
+                                    with_value);
   const auto positional = pcl_movers::tools::positionalArguments(argc, argv, with_value);
   if (positional.size() != 2)
     throw InputError("expected OBJECTS and TRACKS, got " + std::to_string(positional.size()) +
@@ -180,6 +230,9 @@ int run(int argc, char** argv) {
   pcl::console::parse_argument(argc, argv, "--png", opt.png_path);
   pcl::console::parse_argument(argc, argv, "--json", opt.json_path);
   pcl::console::parse_argument(argc, argv, "--title", opt.title);
+  pcl::console::parse_argument(argc, argv, "--dontcare", opt.dont_care_path);
+  pcl::console::parse_argument(argc, argv, "--calib", opt.calib_path);
+  opt.no_dont_care = pcl::console::find_switch(argc, argv, "--no-dontcare");
   opt.overwrite = pcl::console::find_switch(argc, argv, "--overwrite");
 
   checkOutput(opt.png_path, opt.overwrite);
@@ -224,6 +277,7 @@ int run(int argc, char** argv) {
                      " is fewer than the frames in the inputs (up to " + std::to_string(max_frame) +
                      ")");
 
+  opt.metrics.dont_care = loadDontCare(opt);
   const auto score = pcl_movers::eval::scoreDetections(objects, tracks, opt.metrics, poses, times);
   std::cout << pcl_movers::eval::formatMarkdown(score) << std::flush;
   if (!opt.json_path.empty()) {

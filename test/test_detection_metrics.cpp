@@ -5,6 +5,7 @@
  */
 #include <pcl_movers/common.h>
 #include <pcl_movers/eval/detection_metrics.h>
+#include <pcl_movers/eval/kitti_dont_care.h>
 
 #include <gtest/gtest.h>
 
@@ -13,7 +14,10 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <memory>
 #include <string>
+#include <vector>
 
 namespace fs = std::filesystem;
 using pcl_movers::eval::DetectionMetricsParams;
@@ -385,4 +389,184 @@ TEST(DetectionMetrics, FirstReportedCountsLabelledFramesOutsideTheScoredSector) 
   tracks.clear();
   s = scoreDetections(objects, tracks);
   EXPECT_EQ(s.targets[0].first_reported, -1);
+}
+
+// ------------------------------------------------------------------ KITTI DontCare regions
+namespace {
+
+/** A camera looking along the sensor's +x: (x, y, z) -> pixel (50 - 100 y/x, 50 - 100 z/x). */
+pcl_movers::eval::KittiCalibration forwardCamera() {
+  pcl_movers::eval::KittiCalibration c;
+  c.tr_velo_cam << 0, -1, 0, 0, 0, 0, -1, 0, 1, 0, 0, 0;
+  c.r0_rect.setIdentity();
+  c.p2 << 100, 0, 50, 0, 0, 100, 50, 0, 0, 0, 1, 0;
+  return c;
+}
+
+/** DontCare box of frame 0 around pixel (60, 50), where the sensor point (10, -1, z≈0) lands. */
+std::shared_ptr<const pcl_movers::eval::DontCareRegions> dontCareAhead() {
+  return std::make_shared<const pcl_movers::eval::DontCareRegions>(
+      forwardCamera(),
+      std::map<int, std::vector<pcl_movers::eval::ImageBox>>{{0, {{55, 40, 65, 60}}}});
+}
+
+}  // namespace
+
+TEST(DetectionMetrics, RowInADontCareBoxIsNeitherHitNorFalseAlarm) {
+  // A target at (30, 8) in frames 0-1; mover rows: (10, -1) in frame 0's DontCare box, (10, 3)
+  // outside it (pixel (20, 49)), (10, -1) again in frame 1 (no DontCare box there), and (-10, 1)
+  // behind the camera: its pixel would be (60, 51) inside the box if the depth sign were ignored.
+  std::vector<GroundTruthObject> objects = {object(0, 1, 30, 8, true), object(1, 1, 30, 8, true)};
+  std::vector<TrackRow> tracks = {row(0, 5, 10, -1), row(0, 6, 10, 3), row(1, 5, 10, -1),
+                                  row(0, 7, -10, 1)};
+  DetectionMetricsParams p;
+  p.sector_deg = 180;
+  const auto counted = scoreDetections(objects, tracks, p);
+  EXPECT_FALSE(counted.dont_care_used);
+  EXPECT_EQ(counted.false_alarms, 4);
+  EXPECT_EQ(counted.dont_care_ignored, 0);
+
+  p.dont_care = dontCareAhead();
+  const auto s = scoreDetections(objects, tracks, p);
+  EXPECT_TRUE(s.dont_care_used);
+  EXPECT_EQ(s.dont_care_ignored, 1);
+  EXPECT_EQ(s.false_alarms, 3);
+  EXPECT_EQ(s.mover_rows_in_sector, 4);
+  EXPECT_EQ(s.targets[0].hits, 0);
+  EXPECT_NEAR(s.false_alarms_per_frame, 1.5, 1e-12);
+  EXPECT_NE(pcl_movers::eval::formatMarkdown(s).find("1 rows in KITTI DontCare regions ignored"),
+            std::string::npos);
+  const std::string js = pcl_movers::eval::formatJson(s);
+  EXPECT_NE(js.find("\"dont_care\": true"), std::string::npos) << js;
+  EXPECT_NE(js.find("\"dont_care_ignored\": 1"), std::string::npos) << js;
+  EXPECT_NE(pcl_movers::eval::formatJson(counted).find("\"dont_care\": false"), std::string::npos);
+}
+
+TEST(DetectionMetrics, DontCareNeverTakesAHitNorExcusesALabelledStaticObject) {
+  // KITTI's devkit matches detections to labelled objects first: a row on a target whose centre
+  // projects into a DontCare box (the box overlaps the target in the image) stays a hit, and a
+  // parked car declared moving stays a false alarm.
+  DetectionMetricsParams p;
+  p.dont_care = dontCareAhead();
+  std::vector<GroundTruthObject> objects = {object(0, 1, 10, -1, true)};
+  const auto hit = scoreDetections(objects, {row(0, 5, 10, -1)}, p);
+  EXPECT_EQ(hit.targets[0].hits, 1);
+  EXPECT_EQ(hit.dont_care_ignored, 0);
+  objects[0].moving = false;
+  const auto parked = scoreDetections(objects, {row(0, 5, 10, -1)}, p);
+  EXPECT_EQ(parked.false_alarms, 1);
+  EXPECT_EQ(parked.false_alarms_on_static_objects, 1);
+  EXPECT_EQ(parked.dont_care_ignored, 0);
+}
+
+// ------------------------------------------------------------------ "why missed" diagnostics
+TEST(DetectionMetrics, TrackedFramesFirstTrackedAndMedianSpeed) {
+  // Target 4 in frames 0-9, too sparse to be visible in frames 0 and 1, speed_mps = frame number.
+  // Any row (mover or not) on its grown box counts as tracked: a non-mover row in frames 1-9
+  // except 5, where the row is 3 m beside the box; movers from frame 7.
+  std::vector<GroundTruthObject> objects;
+  std::vector<TrackRow> tracks;
+  for (int f = 0; f < 10; ++f) {
+    objects.push_back(object(f, 4, 20.0, 0.0, true, f < 2 ? 5 : 100));
+    objects.back().speed = f;
+    if (f >= 1) tracks.push_back(row(f, 8, 20.4, f == 5 ? 4.5 : 0.3, f >= 7));
+  }
+  objects.push_back(object(0, 9, 40.0, 0.0, true, 5));  // never visible
+  const auto s = scoreDetections(objects, tracks);
+  ASSERT_EQ(s.targets.size(), 2u);
+  const auto& t = s.targets[0];
+  EXPECT_EQ(t.visible_frames, 8);
+  EXPECT_EQ(t.tracked_frames, 7);  // frames 2-9 but 5; frame 1 is not visible
+  EXPECT_EQ(t.first_tracked, 2);
+  EXPECT_EQ(t.hits, 3);
+  EXPECT_NEAR(t.median_speed, 5.5, 1e-12);  // median of 2..9
+  EXPECT_EQ(s.targets[1].tracked_frames, 0);
+  EXPECT_EQ(s.targets[1].first_tracked, -1);
+  EXPECT_TRUE(std::isnan(s.targets[1].median_speed));
+  const std::string js = pcl_movers::eval::formatJson(s);
+  EXPECT_NE(js.find("\"tracked_frames\": 7, \"first_tracked\": 2, \"median_speed\": 5.500"),
+            std::string::npos)
+      << js;
+  EXPECT_NE(js.find("\"tracked_frames\": 0, \"first_tracked\": -1, \"median_speed\": null"),
+            std::string::npos)
+      << js;
+}
+
+TEST(EvalTool, DontCareFlagsAndErrors) {
+  if (!fs::exists(toolPath())) GTEST_SKIP() << "pcl_movers_eval not built at " << toolPath();
+  const fs::path dir = fs::temp_directory_path() / "pcl_movers_eval_dontcare_test";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  writeFile(dir / "objects.txt", "0 0 Van 30 8 0 4 2 2 0 1 5 100\n");
+  // One mover row at (10, -1, 0): pixel (60, 50) with the calib below, in the DontCare box.
+  writeFile(dir / "tracks.csv",
+            "frame,time,track_id,mover,x,y,z,wx,wy,wz,vx,vy,speed,length,width,height,yaw,"
+            "similarity,points\n0,0,3,1,10,-1,0,10,-1,0,5,0,5,4,2,2,0,0.9,80\n");
+  writeFile(dir / "calib.txt",
+            "P2: 100 0 50 0 0 100 50 0 0 0 1 0\nR0_rect: 1 0 0 0 1 0 0 0 1\n"
+            "Tr_velo_cam: 0 -1 0 0 0 0 -1 0 1 0 0 0\n");
+  writeFile(dir / "labels.txt",
+            "0 -1 DontCare -1 -1 -10 55 40 65 60 -1000 -1000 -1000 -10 -1 -1 -1\n");
+  const std::string base = (dir / "objects.txt").string() + " " + (dir / "tracks.csv").string();
+  const std::string flags =
+      " --dontcare " + (dir / "labels.txt").string() + " --calib " + (dir / "calib.txt").string();
+  std::string out;
+  ASSERT_EQ(runTool(base + flags + " --json " + (dir / "s.json").string(), &out), 0) << out;
+  EXPECT_NE(out.find("0 in 1 frames, 0 on static objects; 1 rows in KITTI DontCare regions "
+                     "ignored"),
+            std::string::npos)
+      << out;
+  std::ifstream json(dir / "s.json");
+  const std::string js((std::istreambuf_iterator<char>(json)), std::istreambuf_iterator<char>());
+  EXPECT_NE(js.find("\"dont_care_ignored\": 1"), std::string::npos) << js;
+  ASSERT_EQ(runTool(base, &out), 0) << out;  // no regions: the row is a false alarm
+  EXPECT_NE(out.find("(1 in 1 frames, 0 on static objects)"), std::string::npos) << out;
+
+  // One of the pair, contradicting switches, malformed files: non-zero exit naming the problem.
+  EXPECT_NE(runTool(base + " --dontcare " + (dir / "labels.txt").string(), &out), 0);
+  EXPECT_NE(out.find("--dontcare needs --calib"), std::string::npos) << out;
+  EXPECT_NE(runTool(base + flags + " --no-dontcare", &out), 0);
+  EXPECT_NE(out.find("--no-dontcare contradicts"), std::string::npos) << out;
+  writeFile(dir / "bad_calib.txt", "P2: 100 0 50\n");
+  EXPECT_NE(runTool(base + " --dontcare " + (dir / "labels.txt").string() + " --calib " +
+                        (dir / "bad_calib.txt").string(),
+                    &out),
+            0);
+  EXPECT_NE(out.find("bad_calib.txt:1: P2: expected 12 numbers"), std::string::npos) << out;
+  writeFile(dir / "bad_labels.txt", "0 -1 DontCare -1 -1 -10 55 40 65\n");
+  EXPECT_NE(runTool(base + " --dontcare " + (dir / "bad_labels.txt").string() + " --calib " +
+                        (dir / "calib.txt").string(),
+                    &out),
+            0);
+  EXPECT_NE(out.find("bad_labels.txt:1: expected 17 or 18 columns"), std::string::npos) << out;
+  fs::remove_all(dir);
+}
+
+// With --sequence on the real KITTI folder its labels and calib are used by default (said on
+// stderr); --no-dontcare counts the row in frame 0's DontCare box as a false alarm again.
+TEST(EvalTool, SequenceFolderDontCareByDefault) {
+  if (!fs::exists(toolPath())) GTEST_SKIP() << "pcl_movers_eval not built at " << toolPath();
+  const std::string seq = std::string(PCL_MOVERS_SHARED_DATA) + "/kitti-tracking-0000-a";
+  if (!fs::exists(seq + "/labels_kitti_tracking.txt"))
+    GTEST_SKIP() << "KITTI data not found at " << seq << " (set PCL_MOVERS_SHARED_DATA)";
+  const fs::path dir = fs::temp_directory_path() / "pcl_movers_eval_dontcare_seq_test";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  // (26.602, 13.848, -0.733) projects into frame 0's DontCare box (232, 202.5); no label there.
+  writeFile(dir / "tracks.csv",
+            "frame,time,track_id,mover,x,y,z,wx,wy,wz,vx,vy,speed,length,width,height,yaw,"
+            "similarity,points\n0,0,3,1,26.602,13.848,-0.733,0,0,0,5,0,5,4,2,2,0,0.9,80\n");
+  const std::string base =
+      seq + "/objects.txt " + (dir / "tracks.csv").string() + " --sequence " + seq;
+  std::string out;
+  ASSERT_EQ(runTool(base, &out), 0) << out;
+  EXPECT_NE(out.find("DontCare: 122 KITTI DontCare boxes from " + seq), std::string::npos) << out;
+  EXPECT_NE(out.find("| false alarms / frame | 0.0000 (0 in 77 frames, 0 on static objects; 1 "
+                     "rows in KITTI DontCare regions ignored) |"),
+            std::string::npos)
+      << out;
+  ASSERT_EQ(runTool(base + " --no-dontcare", &out), 0) << out;
+  EXPECT_EQ(out.find("DontCare"), std::string::npos) << out;
+  EXPECT_NE(out.find("(1 in 77 frames, 0 on static objects) |"), std::string::npos) << out;
+  fs::remove_all(dir);
 }

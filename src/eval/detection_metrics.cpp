@@ -89,6 +89,47 @@ std::string jsonString(const std::string& s) {
   return out + "\"";
 }
 
+using ObjectsByFrame = std::map<int, std::vector<const io::GroundTruthObject*>>;
+using RowsByFrame = std::map<int, std::vector<const io::TrackRow*>>;
+
+/** Whether some row's centroid lies in the object's grown box. */
+bool anyRowIn(const io::GroundTruthObject& o, const std::vector<const io::TrackRow*>& rows,
+              const DetectionMetricsParams& params) {
+  for (const auto* r : rows)
+    if (o.contains(Eigen::Vector3d(r->x, r->y, r->z), params.grow_xy, params.grow_z)) return true;
+  return false;
+}
+
+/** False alarms: mover rows in the sector outside every target's grown box of their frame; those
+ * in no labelled box that project into a DontCare box are ignored instead. */
+void countFalseAlarms(const RowsByFrame& movers_by_frame, const ObjectsByFrame& objects_by_frame,
+                      const DetectionMetricsParams& params, DetectionScore& score) {
+  for (const auto& fm : movers_by_frame) {
+    const auto oit = objects_by_frame.find(fm.first);
+    for (const auto* r : fm.second) {
+      if (!inSector(r->x, r->y, params.sector_deg)) continue;
+      ++score.mover_rows_in_sector;
+      const Eigen::Vector3d c(r->x, r->y, r->z);
+      bool on_target = false, on_static = false;
+      if (oit != objects_by_frame.end())
+        for (const auto* o : oit->second) {
+          if (!o->contains(c, params.grow_xy, params.grow_z)) continue;
+          if (o->moving)
+            on_target = true;
+          else
+            on_static = true;
+        }
+      if (on_target) continue;
+      if (!on_static && params.dont_care && params.dont_care->contains(fm.first, c)) {
+        ++score.dont_care_ignored;
+        continue;
+      }
+      ++score.false_alarms;
+      if (on_static) ++score.false_alarms_on_static_objects;
+    }
+  }
+}
+
 }  // namespace
 
 DetectionScore scoreDetections(const std::vector<io::GroundTruthObject>& objects,
@@ -101,12 +142,13 @@ DetectionScore scoreDetections(const std::vector<io::GroundTruthObject>& objects
                      std::to_string(params.sector_deg));
   if (params.grow_xy < 0 || params.grow_z < 0) throw InputError("box growth must be >= 0");
   DetectionScore score;
+  score.dont_care_used = params.dont_care != nullptr;
   const bool use_poses = !poses.empty();
   score.velocity_mode = use_poses ? "world velocity (poses)" : "speed (objects.txt speed_mps)";
 
   // Index everything by frame.
-  std::map<int, std::vector<const io::GroundTruthObject*>> objects_by_frame;
-  std::map<int, std::vector<const io::TrackRow*>> movers_by_frame;
+  ObjectsByFrame objects_by_frame;
+  RowsByFrame movers_by_frame, rows_by_frame;
   std::set<int> frames;
   for (const auto& o : objects) {
     objects_by_frame[o.frame].push_back(&o);
@@ -114,6 +156,7 @@ DetectionScore scoreDetections(const std::vector<io::GroundTruthObject>& objects
   }
   for (const auto& r : tracks) {
     frames.insert(r.frame);
+    rows_by_frame[r.frame].push_back(&r);
     if (r.mover) movers_by_frame[r.frame].push_back(&r);
   }
   score.frames = params.frames > 0 ? params.frames : static_cast<int>(frames.size());
@@ -140,29 +183,33 @@ DetectionScore scoreDetections(const std::vector<io::GroundTruthObject>& objects
     }
   }
 
-  std::map<int, std::vector<double>> squared_errors;
+  std::map<int, std::vector<double>> squared_errors, visible_speeds;
+  static const std::vector<const io::TrackRow*> kNone;
   for (const auto& frame_objects : objects_by_frame) {
     const int frame = frame_objects.first;
     const auto mit = movers_by_frame.find(frame);
-    static const std::vector<const io::TrackRow*> kNone;
     const auto& movers = mit == movers_by_frame.end() ? kNone : mit->second;
+    const auto rit = rows_by_frame.find(frame);
+    const auto& rows = rit == rows_by_frame.end() ? kNone : rit->second;
     for (const auto* o : frame_objects.second) {
       if (!o->moving) continue;
       auto& t = targets[o->track_id];
       const bool visible = o->n_points >= params.min_points &&
                            inSector(o->center.x(), o->center.y(), params.sector_deg);
-      if (t.first_reported < 0)
-        for (const auto* r : movers)
-          if (o->contains(Eigen::Vector3d(r->x, r->y, r->z), params.grow_xy, params.grow_z)) {
-            t.first_reported = frame;  // frames are visited in increasing order
-            t.first_reported_visible = visible;
-            break;
-          }
+      if (t.first_reported < 0 && anyRowIn(*o, movers, params)) {
+        t.first_reported = frame;  // frames are visited in increasing order
+        t.first_reported_visible = visible;
+      }
       if (!visible) continue;
       ++t.visible_frames;
       const bool moving_now = o->speed >= params.moving_speed;
       if (moving_now) ++t.moving_frames;
       if (t.first_visible < 0) t.first_visible = frame;
+      visible_speeds[o->track_id].push_back(o->speed);
+      if (anyRowIn(*o, rows, params)) {
+        ++t.tracked_frames;
+        if (t.first_tracked < 0) t.first_tracked = frame;
+      }
       // The hitting row nearest the box centre carries the velocity estimate we score.
       const io::TrackRow* best = nullptr;
       double best_d = std::numeric_limits<double>::infinity();
@@ -191,27 +238,7 @@ DetectionScore scoreDetections(const std::vector<io::GroundTruthObject>& objects
     }
   }
 
-  // False alarms: mover rows in the sector outside every target's grown box of their frame.
-  for (const auto& fm : movers_by_frame) {
-    const auto oit = objects_by_frame.find(fm.first);
-    for (const auto* r : fm.second) {
-      if (!inSector(r->x, r->y, params.sector_deg)) continue;
-      ++score.mover_rows_in_sector;
-      const Eigen::Vector3d c(r->x, r->y, r->z);
-      bool on_target = false, on_static = false;
-      if (oit != objects_by_frame.end())
-        for (const auto* o : oit->second) {
-          if (!o->contains(c, params.grow_xy, params.grow_z)) continue;
-          if (o->moving)
-            on_target = true;
-          else
-            on_static = true;
-        }
-      if (on_target) continue;
-      ++score.false_alarms;
-      if (on_static) ++score.false_alarms_on_static_objects;
-    }
-  }
+  countFalseAlarms(movers_by_frame, objects_by_frame, params, score);
   score.false_alarms_per_frame = score.frames > 0 ? double(score.false_alarms) / score.frames : 0;
 
   // Totals.
@@ -220,6 +247,7 @@ DetectionScore scoreDetections(const std::vector<io::GroundTruthObject>& objects
   for (auto& kv : targets) {
     auto& t = kv.second;
     const auto& sq = squared_errors[t.track_id];
+    t.median_speed = median(visible_speeds[t.track_id]);
     t.velocity_samples = static_cast<int>(sq.size());
     if (!sq.empty()) {
       double s = 0;
@@ -291,7 +319,11 @@ std::string formatMarkdown(const DetectionScore& score) {
       << " |\n"
       << "| false alarms / frame | " << fmt(score.false_alarms_per_frame, 4) << " ("
       << score.false_alarms << " in " << score.frames << " frames, "
-      << score.false_alarms_on_static_objects << " on static objects) |\n"
+      << score.false_alarms_on_static_objects << " on static objects"
+      << (score.dont_care_used ? "; " + std::to_string(score.dont_care_ignored) +
+                                     " rows in KITTI DontCare regions ignored"
+                               : std::string())
+      << ") |\n"
       << "| median delay [frames] | " << fmt(score.median_delay, 1) << " ("
       << score.targets_never_detected << " never detected) |\n"
       << "| RMS velocity error [m/s] | " << fmt(score.rms_velocity_error, 3) << " ("
@@ -304,6 +336,8 @@ std::string formatJson(const DetectionScore& score) {
   out << "{\n  \"frames\": " << score.frames << ",\n  \"false_alarms\": " << score.false_alarms
       << ",\n  \"false_alarms_on_static_objects\": " << score.false_alarms_on_static_objects
       << ",\n  \"mover_rows_in_sector\": " << score.mover_rows_in_sector
+      << ",\n  \"dont_care\": " << (score.dont_care_used ? "true" : "false")
+      << ",\n  \"dont_care_ignored\": " << score.dont_care_ignored
       << ",\n  \"false_alarms_per_frame\": " << jsonNumber(score.false_alarms_per_frame, 5)
       << ",\n  \"mean_hit_rate\": " << jsonNumber(score.mean_hit_rate)
       << ",\n  \"pooled_hit_rate\": " << jsonNumber(score.pooled_hit_rate)
@@ -325,6 +359,9 @@ std::string formatJson(const DetectionScore& score) {
         << ", \"velocity_samples\": " << t.velocity_samples
         << ", \"first_reported\": " << t.first_reported
         << ", \"first_reported_visible\": " << (t.first_reported_visible ? "true" : "false")
+        << ", \"tracked_frames\": " << t.tracked_frames
+        << ", \"first_tracked\": " << t.first_tracked
+        << ", \"median_speed\": " << jsonNumber(t.median_speed, 3)
         << ", \"extra_moving_frames\": " << t.moving_frames
         << ", \"extra_moving_hit_rate\": " << jsonNumber(t.movingHitRate()) << "}";
   }

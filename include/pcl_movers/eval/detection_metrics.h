@@ -3,11 +3,13 @@
  */
 #pragma once
 
+#include <pcl_movers/eval/kitti_dont_care.h>
 #include <pcl_movers/io/ground_truth.h>
 #include <pcl_movers/io/tracks.h>
 
 #include <Eigen/Geometry>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -41,6 +43,12 @@ struct DetectionMetricsParams {
    * where it stands still (the open scene's van waits ~40 frames before driving off), which no
    * detector of motion can hit before it has seen the object move. */
   double moving_speed = 0.5;
+  /** \brief KITTI DontCare regions (none by default). A `mover` row in the sector that lies in no
+   * target's grown box and no labelled object's box, and whose centroid projects into a DontCare
+   * box of its frame, is ignored: neither a hit nor a false alarm (DetectionScore::
+   * dont_care_ignored). As in KITTI's devkit, rows are matched to the labelled objects first, so a
+   * DontCare box that overlaps a target in the image never takes a hit away. */
+  std::shared_ptr<const DontCareRegions> dont_care;
 };
 
 /** \brief Per-target result. */
@@ -67,6 +75,14 @@ struct TargetScore {
    * target's speed >= moving_speed, and the hits among them. */
   int moving_frames = 0;
   int moving_hits = 0;
+  /** \brief Diagnostic: visible frames in which some row of tracks.csv, mover or not, has its
+   * centroid in the target's grown box (the target was segmented and tracked as an object). */
+  int tracked_frames = 0;
+  /** \brief Diagnostic: first visible frame counted in tracked_frames; -1 when never. */
+  int first_tracked = -1;
+  /** \brief Median of the target's objects.txt `speed_mps` over its visible frames [m/s]; NaN
+   * when never visible. */
+  double median_speed = std::numeric_limits<double>::quiet_NaN();
   double movingHitRate() const {
     return moving_frames > 0 ? double(moving_hits) / moving_frames
                              : std::numeric_limits<double>::quiet_NaN();
@@ -86,6 +102,11 @@ struct DetectionScore {
   /** \brief False alarms that matched a non-moving ground-truth object (e.g. a parked car declared
    * a mover); they are false alarms too, counted here for diagnosis. */
   int false_alarms_on_static_objects = 0;
+  /** \brief Whether DontCare regions were applied (DetectionMetricsParams::dont_care). */
+  bool dont_care_used = false;
+  /** \brief Mover rows in the sector ignored because they project into a DontCare box (and
+   * match no labelled object); included in mover_rows_in_sector, not in false_alarms. */
+  int dont_care_ignored = 0;
   double mean_hit_rate = std::numeric_limits<double>::quiet_NaN();    ///< over visible targets
   double pooled_hit_rate = std::numeric_limits<double>::quiet_NaN();  ///< all hits / all visible
   /** \brief Extra variant, not the DESIGN metric: mean over targets of movingHitRate(). */
@@ -114,6 +135,8 @@ struct DetectionScore {
  *   one per frame index) are given, |(vx, vy) - v_gt| with v_gt the horizontal world velocity of
  *   the box centre (line fit over +-velocity_half_window frames, times from `times` or 10 Hz);
  *   otherwise | |(vx, vy)| - speed_mps |, which needs no poses but ignores heading errors.
+ * - with `params.dont_care`, a row that would be a false alarm (in the sector, in no labelled box)
+ *   and projects into a DontCare box of its frame is ignored instead (KITTI's benchmark).
  *
  * \param times seconds per frame index; empty = 10 Hz.
  * Throws InputError when a frame index has no pose/time. */
