@@ -472,7 +472,7 @@ std::string BadInputs::good_frame_;
 TEST_F(BadInputs, HelpIsNotAnError) {
   int checked = 0;
   for (const char* tool : {"detect", "ground", "segment", "organize", "register", "simulate",
-                           "eval", "eval_segmentation", "ego_motion", "viewer"}) {
+                           "eval", "eval_segmentation", "ego_motion", "viewer", "corpus"}) {
     if (!toolBuilt(tool)) continue;
     SCOPED_TRACE(tool);
     const RunResult r = run(tool, "-h");
@@ -726,7 +726,38 @@ TEST_F(BadInputs, Simulate) {
                   Expect::kFail,
                   {"hdl999"},
                   o});
+  rows.push_back({"generated scene (control)",
+                  "--family urban --seed 2 --frames 2 " + quote(o),
+                  Expect::kPass,
+                  {},
+                  o});
+  rows.push_back(
+      {"unknown --family", "--family motorway " + quote(o), Expect::kFail, {"motorway"}, o});
+  rows.push_back({"--family with a scenario file too",
+                  "--family urban " + quote(in("small.yaml")) + " " + quote(o),
+                  Expect::kFail,
+                  {"positional"},
+                  o});
   check("simulate", rows);
+}
+
+TEST_F(BadInputs, Corpus) {
+  SKIP_UNLESS_BUILT("corpus");
+  const std::string o = out("corpus_out");
+  std::vector<Row> rows = {
+      {"no output folder", "", Expect::kFail, {"output folder"}, ""},
+      {"unknown --split", quote(o) + " --split half", Expect::kFail, {"--split"}, o},
+      {"unknown family", quote(o) + " --families motorway", Expect::kFail, {"motorway"}, o},
+      {"unknown mode", quote(o) + " --modes icp", Expect::kFail, {"icp"}, o},
+      {"--seeds 0", quote(o) + " --seeds 0", Expect::kFail, {"--seeds"}, o},
+      {"--detect not a program",
+       quote(o) + " --detect " + quote(in("small.yaml")),
+       Expect::kFail,
+       {"small.yaml"},
+       o},
+      {"output is a file", quote(in("small.yaml")), Expect::kFail, {"not a folder"}, ""},
+  };
+  check("corpus", rows);
 }
 
 TEST_F(BadInputs, Eval) {
