@@ -267,7 +267,11 @@ std::string toolPath() {
 }
 
 int runTool(const std::string& args, std::string* output = nullptr) {
-  const std::string out_file = fs::temp_directory_path() / "pcl_movers_eval_test_out.txt";
+  // One output file per test: ctest runs the EvalTool tests in parallel processes.
+  const std::string out_file =
+      fs::temp_directory_path() /
+      ("pcl_movers_eval_test_out." +
+       std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + ".txt");
   const int rc = std::system((toolPath() + " " + args + " >" + out_file + " 2>&1").c_str());
   if (output) {
     std::ifstream in(out_file);

@@ -36,7 +36,9 @@ const char* const kRealCalib =
     "1.728540e+02 2.163791e-01 0.000000e+00 0.000000e+00 1.000000e+00 2.745884e-03\n";
 
 fs::path tempFile(const std::string& name, const std::string& text) {
-  const fs::path dir = fs::temp_directory_path() / "pcl_movers_kitti_dont_care_test";
+  // One folder per test: ctest runs the tests of this file in parallel processes.
+  const fs::path dir = fs::temp_directory_path() / "pcl_movers_kitti_dont_care_test" /
+                       ::testing::UnitTest::GetInstance()->current_test_info()->name();
   fs::create_directories(dir);
   std::ofstream(dir / name) << text;
   return dir / name;
