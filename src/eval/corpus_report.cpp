@@ -228,7 +228,7 @@ std::string formatCorpusReport(const std::vector<CorpusRun>& runs,
   if (!options.command.empty()) out << "Made by `" << options.command << "` ";
   out << "in " << fixed(options.wall_seconds / 60.0, 1) << " min on " << options.cores << " cores ("
       << fixed(options.generate_seconds / 60.0, 1)
-      << " min of it simulating scenes that were not cached).\n\n"
+      << " min of worker time simulating scenes that were not cached).\n\n"
       << "Hit % is the mean over targets of each target's hits / visible frames; FA / frame the "
          "false alarms over all frames; median delay over targets hit at least once; vel. RMS "
          "pooled over hits. The first mode's columns come first; the others are prefixed.\n\n";
