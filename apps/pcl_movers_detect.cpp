@@ -11,12 +11,16 @@
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/io/pcd_io.h>
 
+#include <signal.h>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <set>
 #include <sstream>
@@ -35,11 +39,17 @@ namespace {
 using PointT = pcl::PointXYZI;
 using Detector = pcl_movers::MoverDetector<PointT>;
 
-const std::vector<std::string> kFlags{
-    "-h", "--help", "--overwrite", "--labelled-clouds", "--estimate-poses", "--print-config"};
+const std::vector<std::string> kFlags{"-h",
+                                      "--help",
+                                      "--overwrite",
+                                      "--labelled-clouds",
+                                      "--estimate-poses",
+                                      "--print-config",
+                                      "--skip-bad-frames",
+                                      "--resume"};
 
 std::vector<std::string> optionsWithValue() {
-  std::vector<std::string> with_value{"--config", "--rate"};
+  std::vector<std::string> with_value{"--config", "--rate", "--stop-after-frames"};
   for (const auto& key : DetectorParameters().keys()) with_value.push_back("--" + key);
   return with_value;
 }
@@ -51,8 +61,10 @@ void printHelp(const char* name) {
      << "Detects movers (moving vehicles and people) in the LiDAR sequence folder SEQ "
         "(frames/*.pcd,\n"
      << "*.pcd or velodyne/*.bin; poses.txt or PCD VIEWPOINTs; times.txt) and writes to OUT:\n"
-     << "  tracks.csv     one row per tracked object per frame (see DESIGN.md)\n"
-     << "  summary.json   per-stage timings, counts and the parameters used\n"
+     << "  tracks.csv     one row per tracked object per frame (see DESIGN.md), written and\n"
+     << "                 flushed frame by frame\n"
+     << "  summary.json   state (running/interrupted/finished, last complete frame), blind and\n"
+     << "                 bad frames, per-stage timings, counts and the parameters used\n"
      << "  labelled/      with --labelled-clouds: NNNNNN.pcd, fields x y z label track\n"
      << "                 (label 0 unlabelled, 1 ground, 2 static, 3 mover; track id or -1)\n\n"
      << "Options:\n"
@@ -62,8 +74,17 @@ void printHelp(const char* name) {
      << "                     (always done when it has none)\n"
      << "  --labelled-clouds  also write OUT/labelled/NNNNNN.pcd\n"
      << "  --overwrite        write into a non-empty OUT\n"
+     << "  --skip-bad-frames  a malformed frame (truncated, not a PCD, ...) is warned about,\n"
+     << "                     counted in summary.json and treated as blind instead of an error\n"
+     << "  --resume           continue the interrupted run in OUT after its last complete frame\n"
+     << "                     (same SEQ and options; the done frames are run again, unwritten)\n"
      << "  --print-config     print the parameters as a config file and exit\n"
      << "  -h, --help         this help\n\n"
+     << "A frame without returns (or, with --sensor auto, too few to estimate the beam layout\n"
+     << "from) is blind: a warning, its tracks coast, the run goes on. SIGINT/SIGTERM stop the "
+        "run\n"
+     << "after the current frame: tracks.csv keeps every complete frame, summary.json says\n"
+     << "\"interrupted\": true, exit code 130/143. Geo-referenced (UTM) poses are fine.\n\n"
      << "Parameters (--KEY VALUE or in the config file; defaults shown):\n";
   defaults.forEachParameter([&](const char* key, const auto& value, const char* doc) {
     std::string k = std::string("  --") + key + " " + pcl_movers::detail::formatValue(value);
@@ -134,181 +155,517 @@ void checkFinite(const pcl::PointCloud<PointT>& cloud, const std::string& path) 
       throw InputError(path, 0, "scan has infinite coordinates");
 }
 
-int run(int argc, char** argv) {
-  if (pcl_movers::tools::wantsHelp(argc, argv)) {
-    printHelp(argv[0]);
-    return 0;
-  }
+// ------------------------------------------------------------------ interruption
+/// SIGINT/SIGTERM received (or --stop-after-frames reached): the run stops after its current
+/// frame. The handler is reset by the first signal, so a second one ends the process at once.
+volatile std::sig_atomic_t g_stop_signal = 0;
+
+extern "C" void onStopSignal(int signal) {
+  g_stop_signal = signal;
+}
+
+void installStopHandlers() {
+  struct sigaction action {};
+  action.sa_handler = onStopSignal;
+  sigemptyset(&action.sa_mask);
+  action.sa_flags = SA_RESETHAND;
+  sigaction(SIGINT, &action, nullptr);
+  sigaction(SIGTERM, &action, nullptr);
+}
+
+// ------------------------------------------------------------------ options
+struct Options {
+  std::string seq, out;
+  DetectorParameters params;
+  double rate = 10.0;
+  bool overwrite = false, labelled = false, force_estimate = false, skip_bad = false;
+  bool resume = false;
+  long stop_after = -1;  ///< hidden --stop-after-frames N (tests): stop as on SIGINT after N
+};
+
+double parseRate(const std::string& r) {
+  char* end = nullptr;
+  const double rate = std::strtod(r.c_str(), &end);
+  if (end == r.c_str() || *end != '\0' || !(rate > 0) || !std::isfinite(rate))
+    throw InputError("--rate: '" + r + "' is not a positive number");
+  return rate;
+}
+
+/** Options from argv; false when the run is done already (--print-config). */
+bool parseOptions(int argc, char** argv, Options& o) {
   const auto with_value = optionsWithValue();
   pcl_movers::tools::checkArguments(argc, argv, kFlags, with_value);
-
-  DetectorParameters params;
-  std::string config;
-  if (pcl::console::parse_argument(argc, argv, "--config", config) >= 0) params.readConfig(config);
-  for (const auto& key : params.keys()) {
-    std::string value;
-    if (pcl::console::parse_argument(argc, argv, ("--" + key).c_str(), value) >= 0)
-      params.set(key, value, "--" + key);
-  }
-  params.validate();
+  std::string config, v;
+  if (pcl::console::parse_argument(argc, argv, "--config", config) >= 0)
+    o.params.readConfig(config);
+  for (const auto& key : o.params.keys())
+    if (pcl::console::parse_argument(argc, argv, ("--" + key).c_str(), v) >= 0)
+      o.params.set(key, v, "--" + key);
+  o.params.validate();
   if (pcl::console::find_switch(argc, argv, "--print-config")) {
-    std::printf("%s", params.toConfig().c_str());
-    return 0;
+    std::printf("%s", o.params.toConfig().c_str());
+    return false;
   }
-  double rate = 10.0;
-  {
-    std::string r;
-    if (pcl::console::parse_argument(argc, argv, "--rate", r) >= 0) {
-      char* end = nullptr;
-      rate = std::strtod(r.c_str(), &end);
-      if (end == r.c_str() || *end != '\0' || !(rate > 0) || !std::isfinite(rate))
-        throw InputError("--rate: '" + r + "' is not a positive number");
-    }
+  if (pcl::console::parse_argument(argc, argv, "--rate", v) >= 0) o.rate = parseRate(v);
+  if (pcl::console::parse_argument(argc, argv, "--stop-after-frames", v) >= 0) {
+    const double n = pcl_movers::tools::parseNumber("--stop-after-frames", v);
+    if (!(n >= 1) || n != std::floor(n))
+      throw InputError("--stop-after-frames: '" + v + "' is not a positive whole number");
+    o.stop_after = static_cast<long>(n);
   }
-
   const auto positional = pcl_movers::tools::positionalArguments(argc, argv, with_value);
   if (positional.size() != 2) {
     printHelp(argv[0]);
     throw InputError("expected 2 arguments SEQ OUT, got " + std::to_string(positional.size()));
   }
-  const std::string seq = positional[0], out = positional[1];
-  const bool overwrite = pcl::console::find_switch(argc, argv, "--overwrite");
-  const bool labelled = pcl::console::find_switch(argc, argv, "--labelled-clouds");
-  const bool force_estimate = pcl::console::find_switch(argc, argv, "--estimate-poses");
+  o.seq = positional[0];
+  o.out = positional[1];
+  o.overwrite = pcl::console::find_switch(argc, argv, "--overwrite");
+  o.labelled = pcl::console::find_switch(argc, argv, "--labelled-clouds");
+  o.force_estimate = pcl::console::find_switch(argc, argv, "--estimate-poses");
+  o.skip_bad = pcl::console::find_switch(argc, argv, "--skip-bad-frames");
+  o.resume = pcl::console::find_switch(argc, argv, "--resume");
+  if (o.resume && o.overwrite)
+    throw InputError("--resume continues the run in OUT; it cannot be combined with --overwrite");
+  return true;
+}
 
-  if (!fs::is_directory(seq)) throw InputError(seq, 0, "sequence folder does not exist");
-  pcl_movers::io::SequenceReader reader(seq, rate);
-  if (reader.empty()) throw InputError(seq, 0, "no frames (frames/*.pcd, *.pcd or velodyne/*.bin)");
-  if (fs::exists(out) && !fs::is_directory(out))
-    throw InputError(out, 0, "output exists and is not a folder");
-  if (fs::exists(out) && fs::equivalent(out, seq))
-    throw InputError(out, 0, "output folder is the input sequence");
+/** FNV-1a, 64 bits, as 16 hex digits. */
+std::string hashHex(const std::string& text) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (const unsigned char c : text) h = (h ^ c) * 1099511628211ull;
+  char buf[20];
+  std::snprintf(buf, sizeof(buf), "%016llx", static_cast<unsigned long long>(h));
+  return buf;
+}
 
-  // Everything this run creates, so that a failure leaves nothing half-written behind.
-  const bool out_existed = fs::exists(out);
-  pcl_movers::io::prepareOutputDirectory(out, overwrite);
-  std::vector<std::string> created;
-  bool created_labelled_dir = false;
-  const std::string labelled_dir = out + "/labelled";
-  auto cleanup = [&]() {
+/** What a resumed run must share with the run it continues: the input (path, frame files and
+ * their sizes), the frame rate, the options that change the output, and every parameter. */
+std::string runKey(const Options& o, const pcl_movers::io::SequenceReader& reader) {
+  std::ostringstream key;
+  std::error_code ec;
+  key << fs::weakly_canonical(o.seq, ec).string() << "\nrate " << o.rate << "\nestimate "
+      << o.force_estimate << "\nlabelled " << o.labelled << "\nskip_bad " << o.skip_bad << "\n";
+  for (const auto& path : reader.framePaths())
+    key << fs::path(path).filename().string() << " " << fs::file_size(path, ec) << "\n";
+  key << o.params.toConfig();
+  return hashHex(key.str());
+}
+
+// ------------------------------------------------------------------ summary.json
+/** Value of `"key": ...` in summary.json text (number, bool or string without its quotes), or
+ * "" when absent. Enough for the keys this tool writes itself. */
+std::string jsonValue(const std::string& text, const std::string& key) {
+  const std::string tag = "\"" + key + "\": ";
+  const std::size_t at = text.find(tag);
+  if (at == std::string::npos) return "";
+  std::size_t b = at + tag.size();
+  if (b < text.size() && text[b] == '"') {
+    const std::size_t e = text.find('"', b + 1);
+    return e == std::string::npos ? "" : text.substr(b + 1, e - b - 1);
+  }
+  std::size_t e = b;
+  while (e < text.size() && text[e] != ',' && text[e] != '\n' && text[e] != '}') ++e;
+  return text.substr(b, e - b);
+}
+
+std::string jsonList(const std::vector<std::size_t>& v) {
+  std::string s = "[";
+  for (std::size_t k = 0; k < v.size(); ++k) s += (k ? ", " : "") + std::to_string(v[k]);
+  return s + "]";
+}
+
+std::string jsonString(const std::string& text) {
+  std::string s = "\"";
+  for (const char c : text) {
+    if (c == '"' || c == '\\') s += '\\';
+    s += c;
+  }
+  return s + "\"";
+}
+
+/** Everything the run has counted so far. */
+struct RunState {
+  std::string run_key, pose_source, sensor = "organized input (its own rows and columns)";
+  std::size_t frames_done = 0;  ///< complete frames (0 .. frames_done - 1) in tracks.csv
+  std::size_t resumed_from = 0;
+  bool resumed = false;
+  std::vector<std::size_t> blind, bad;
+  std::map<std::string, std::vector<double>> stage_ms;
+  std::set<int> track_ids, mover_ids;
+  std::size_t rows = 0;
+};
+
+std::string timingsJson(const RunState& st, bool estimate) {
+  std::ostringstream js;
+  bool first = true;
+  std::vector<std::string> order = Detector::stageNames();
+  if (estimate) order.insert(order.begin(), "ego_motion");
+  for (const auto& stage : order) {
+    const auto it = st.stage_ms.find(stage);
+    if (it == st.stage_ms.end()) continue;
+    double mean = 0;
+    for (const double v : it->second) mean += v;
+    mean /= std::max<std::size_t>(1, it->second.size());
+    char buf[160];
+    std::snprintf(buf, sizeof(buf), "%s\n    \"%s\": {\"median\": %.3f, \"mean\": %.3f}",
+                  first ? "" : ",", stage.c_str(), median(it->second), mean);
+    js << buf;
+    first = false;
+  }
+  return js.str();
+}
+
+/** summary.json, through a temporary name. `state`: running, interrupted or finished. */
+void writeSummary(const Options& o, std::size_t frames, const RunState& st,
+                  const std::string& state, int signal, bool estimate) {
+  std::ostringstream js;
+  js << "{\n  \"sequence\": " << jsonString(o.seq) << ",\n  \"frames\": " << frames
+     << ",\n  \"state\": \"" << state
+     << "\",\n  \"interrupted\": " << (state == "finished" ? "false" : "true");
+  if (signal != 0)
+    js << ",\n  \"signal\": \"" << (signal == SIGTERM ? "SIGTERM" : "SIGINT") << "\"";
+  js << ",\n  \"frames_done\": " << st.frames_done
+     << ",\n  \"last_complete_frame\": " << static_cast<long>(st.frames_done) - 1;
+  if (st.resumed) js << ",\n  \"resumed_from_frame\": " << st.resumed_from;
+  js << ",\n  \"run_key\": \"" << st.run_key << "\",\n  \"pose_source\": \"" << st.pose_source
+     << "\",\n  \"sensor\": " << jsonString(st.sensor)
+     << ",\n  \"blind_frames\": " << jsonList(st.blind)
+     << ",\n  \"blind_frame_count\": " << st.blind.size()
+     << ",\n  \"bad_frames\": " << jsonList(st.bad) << ",\n  \"bad_frame_count\": " << st.bad.size()
+     << ",\n  \"rows\": " << st.rows << ",\n  \"tracks\": " << st.track_ids.size()
+     << ",\n  \"movers\": " << st.mover_ids.size() << ",\n  \"timings_ms\": {"
+     << timingsJson(st, estimate) << "\n  },\n  \"parameters\": " << o.params.toJson() << "\n}\n";
+  const std::string path = o.out + "/summary.json", tmp = path + ".tmp";
+  {
+    std::ofstream f(tmp);
+    f << js.str();
+    if (!f) throw InputError(tmp, 0, "cannot write");
+  }
+  fs::rename(tmp, path);
+}
+
+// ------------------------------------------------------------------ tracks.csv
+/** The rows already on disk of the run being resumed. */
+struct PreviousRun {
+  std::size_t frames_done = 0;
+  std::vector<std::string> lines;  ///< rows of frames < frames_done, in file order
+};
+
+/** Reads OUT/summary.json and OUT/tracks.csv of the run --resume continues; refuses a folder
+ * written by another run (other input, options or parameters) or a finished one. */
+PreviousRun readPreviousRun(const Options& o, const std::string& run_key) {
+  const std::string summary_path = o.out + "/summary.json", tracks_path = o.out + "/tracks.csv";
+  if (!fs::is_regular_file(summary_path) || !fs::is_regular_file(tracks_path))
+    throw InputError(o.out, 0, "--resume: no summary.json and tracks.csv of an earlier run here");
+  std::ifstream in(summary_path);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (jsonValue(text, "run_key") != run_key)
+    throw InputError(summary_path, 0,
+                     "--resume: written by a different run (input, frames, options or parameters "
+                     "differ); give the same SEQ and options, or start afresh with --overwrite");
+  if (jsonValue(text, "state") == "finished")
+    throw InputError(summary_path, 0, "--resume: this run is finished; nothing to resume");
+  PreviousRun prev;
+  prev.frames_done = static_cast<std::size_t>(std::atol(jsonValue(text, "frames_done").c_str()));
+  std::ifstream tracks(tracks_path);
+  std::string line;
+  if (!std::getline(tracks, line) || line != pcl_movers::io::tracksCsvHeader())
+    throw InputError(tracks_path, 1, "--resume: not a tracks.csv of this tool");
+  while (std::getline(tracks, line))
+    if (std::atol(line.c_str()) < static_cast<long>(prev.frames_done)) prev.lines.push_back(line);
+  return prev;
+}
+
+/** tracks.csv, written frame by frame: each complete frame is flushed to disk at once. */
+class TracksFile {
+ public:
+  /** A new file with the header. */
+  void create(const std::string& path) {
+    path_ = path;
+    open(std::ios::trunc);
+    out_ << pcl_movers::io::tracksCsvHeader() << '\n';
+    flush();
+  }
+  /** An existing file cut to its header and `lines` (the verified rows), continued after them. */
+  void resume(const std::string& path, const std::vector<std::string>& lines) {
+    path_ = path;
+    std::uintmax_t size = std::strlen(pcl_movers::io::tracksCsvHeader()) + 1;
+    for (const auto& l : lines) size += l.size() + 1;
+    fs::resize_file(path, size);
+    kept_size_ = size;
+    open(std::ios::app);
+  }
+  void writeFrame(const std::vector<pcl_movers::io::TrackRow>& rows) {
+    for (const auto& r : rows) out_ << pcl_movers::io::formatTrackRow(r) << '\n';
+    flush();
+  }
+  /** Back to what resume() kept (a resumed run that fails leaves the folder as it found it). */
+  void rollBack() {
+    out_.close();
     std::error_code ec;
-    for (const auto& f : created) fs::remove(f, ec);
-    if (created_labelled_dir) fs::remove(labelled_dir, ec);
-    if (!out_existed) fs::remove(out, ec);  // only removes it when empty
-  };
+    if (kept_size_ > 0) fs::resize_file(path_, kept_size_, ec);
+  }
 
+ private:
+  void open(std::ios::openmode mode) {
+    out_.open(path_, std::ios::out | mode);
+    if (!out_) throw InputError(path_, 0, "cannot write tracks file");
+  }
+  void flush() {
+    out_.flush();
+    if (!out_) throw InputError(path_, 0, "write failed");
+  }
+  std::string path_;
+  std::ofstream out_;
+  std::uintmax_t kept_size_ = 0;
+};
+
+// ------------------------------------------------------------------ the run
+class DetectRun {
+ public:
+  DetectRun(const Options& o, const pcl_movers::io::SequenceReader& reader)
+      : o_(o), reader_(reader), estimate_(o.force_estimate || !reader.hasPoses()) {
+    st_.run_key = runKey(o, reader);
+    st_.pose_source = estimate_ ? "estimated" : reader.poseSource();
+    if (o.params.sensor != "auto") st_.sensor = o.params.sensor;
+    detector_.setParameters(o.params);
+  }
+
+  /** Runs every frame; returns the exit code (0, or 128 + the signal that stopped it). */
+  int run();
+
+ private:
+  void prepare();
+  void cleanUp();
+  bool readFrame(std::size_t i, pcl::PointCloud<PointT>& scan);
+  void processFrame(std::size_t i);
+  void replayFrame(std::size_t i, const Detector::FrameResult& result);
+  void reportSensor(std::size_t i, const pcl::PointCloud<PointT>& scan);
+  void writeLabelled(std::size_t i, const Detector::FrameResult& result);
+  std::string labelledPath(std::size_t i) const {
+    return o_.out + "/labelled/" + reader_.frameName(i) + ".pcd";
+  }
+
+  const Options& o_;
+  const pcl_movers::io::SequenceReader& reader_;
+  const bool estimate_;
+  Detector detector_;
+  pcl_movers::EgoMotionEstimator<PointT> ego_;
+  RunState st_;
+  PreviousRun prev_;
+  std::size_t prev_cursor_ = 0;  ///< next line of prev_ a replayed row must equal
+  TracksFile tracks_;
+  bool out_existed_ = false, created_labelled_dir_ = false, sensor_reported_ = false;
+  std::vector<std::string> created_;  ///< files a failure removes
+};
+
+void DetectRun::prepare() {
+  out_existed_ = fs::exists(o_.out);
+  const std::string tracks_path = o_.out + "/tracks.csv";
+  if (o_.resume) {
+    prev_ = readPreviousRun(o_, st_.run_key);
+    st_.resumed = true;
+    st_.resumed_from = prev_.frames_done;
+  } else {
+    pcl_movers::io::prepareOutputDirectory(o_.out, o_.overwrite);
+    created_.push_back(tracks_path);
+    tracks_.create(tracks_path);
+    created_.push_back(o_.out + "/summary.json");
+    writeSummary(o_, reader_.size(), st_, "running", 0, estimate_);
+  }
+  const std::string labelled_dir = o_.out + "/labelled";
+  if (o_.labelled && !fs::exists(labelled_dir)) {
+    fs::create_directories(labelled_dir);
+    created_labelled_dir_ = true;
+  }
+}
+
+void DetectRun::cleanUp() {
+  std::error_code ec;
+  if (o_.resume) tracks_.rollBack();
+  for (const auto& f : created_) fs::remove(f, ec);
+  if (created_labelled_dir_) fs::remove(o_.out + "/labelled", ec);
+  if (!out_existed_) fs::remove(o_.out, ec);  // only removes it when empty
+}
+
+/** Reads frame i; false for a malformed frame skipped with --skip-bad-frames. */
+bool DetectRun::readFrame(std::size_t i, pcl::PointCloud<PointT>& scan) {
+  const std::string& path = reader_.framePaths()[i];
   try {
-    if (labelled) {
-      if (!fs::exists(labelled_dir)) {
-        fs::create_directories(labelled_dir);
-        created_labelled_dir = true;
-      }
-    }
-    const bool estimate = force_estimate || !reader.hasPoses();
-    const std::string pose_source = estimate ? "estimated" : reader.poseSource();
-    print_info("Sequence ");
-    print_value("%s", seq.c_str());
-    print_info(": %zu frames, poses: %s, mode: %s\n", reader.size(), pose_source.c_str(),
-               params.mode.c_str());
+    reader_.read(i, scan);
+    checkFinite(scan, path);
+  } catch (const InputError& e) {
+    if (!o_.skip_bad) throw;
+    pcl::console::print_warn(
+        "[pcl_movers_detect] warning: %s; frame %zu skipped "
+        "(--skip-bad-frames), its tracks coast\n",
+        e.what(), i);
+    st_.bad.push_back(i);
+    scan.clear();
+    return false;
+  }
+  // The scan is in the sensor frame; its VIEWPOINT (if any) is the pose.
+  scan.sensor_origin_.setZero();
+  scan.sensor_orientation_.setIdentity();
+  return true;
+}
 
-    Detector detector;
-    detector.setParameters(params);
-    pcl_movers::EgoMotionEstimator<PointT> ego;
+/** Prints the beam layout once it is known ("auto" estimates it from the first usable scan). */
+void DetectRun::reportSensor(std::size_t i, const pcl::PointCloud<PointT>& scan) {
+  if (sensor_reported_ || (scan.isOrganized() && scan.height > 1)) return;
+  const auto& model = detector_.getSensorModel();
+  if (model.rows() == 0) return;
+  sensor_reported_ = true;
+  if (o_.params.sensor != "auto") return;
+  char buf[200];
+  std::snprintf(buf, sizeof(buf), "estimated from %s: %d beams, %.2f to %.2f deg, %d columns",
+                fs::path(reader_.framePaths()[i]).filename().c_str(), model.rows(),
+                model.elevations().front() * 180.0 / M_PI, model.elevations().back() * 180.0 / M_PI,
+                model.columns());
+  st_.sensor = std::string("auto: ") + buf;
+  print_info("Beam layout %s\n", buf);
+}
 
-    std::vector<pcl_movers::io::TrackRow> rows;
-    std::map<std::string, std::vector<double>> stage_ms;
-    std::set<int> track_ids, mover_ids;
-    pcl_movers::tools::ProgressBar progress(reader.size());
-    pcl::PointCloud<PointT>::Ptr scan(new pcl::PointCloud<PointT>);
-    for (std::size_t i = 0; i < reader.size(); ++i) {
-      const std::string& path = reader.framePaths()[i];
-      reader.read(i, *scan);
-      checkFinite(*scan, path);
-      Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-      double ego_ms = 0;
-      if (estimate) {
-        const auto t0 = std::chrono::steady_clock::now();
-        pose = ego.estimate(*scan);
-        ego_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
-                     .count();
-      } else {
-        pose = reader.pose(i);
-      }
-      // The scan is in the sensor frame; its VIEWPOINT (if any) is the pose, used above.
-      scan->sensor_origin_.setZero();
-      scan->sensor_orientation_.setIdentity();
-      Detector::FrameResult result;
-      try {
-        detector.process(scan, pose, reader.time(i), static_cast<int>(i), result);
-      } catch (const InputError& e) {
-        throw InputError(path + ": " + e.what());
-      }
-      for (const auto& t : detector.getTimings()) stage_ms[t.first].push_back(t.second);
-      if (estimate) stage_ms["ego_motion"].push_back(ego_ms);
-      for (const auto& r : result.rows) {
-        track_ids.insert(r.track_id);
-        if (r.mover) mover_ids.insert(r.track_id);
-      }
-      rows.insert(rows.end(), result.rows.begin(), result.rows.end());
-      if (labelled) {
-        const std::string lpath = labelled_dir + "/" + reader.frameName(i) + ".pcd";
-        if (fs::exists(lpath) && !overwrite) throw InputError(lpath, 0, "exists (use --overwrite)");
-        created.push_back(lpath);
-        writeLabelledCloud(lpath, result);
-      }
+void DetectRun::writeLabelled(std::size_t i, const Detector::FrameResult& result) {
+  const std::string path = labelledPath(i);
+  const bool replay = i < prev_.frames_done;
+  if (replay && fs::exists(path)) return;  // written by the run being resumed
+  if (!o_.resume && fs::exists(path) && !o_.overwrite)
+    throw InputError(path, 0, "exists (use --overwrite)");
+  created_.push_back(path);
+  writeLabelledCloud(path + ".tmp", result);
+  fs::rename(path + ".tmp", path);
+}
+
+/** A frame of the run being resumed: its rows must be those on disk. */
+void DetectRun::replayFrame(std::size_t i, const Detector::FrameResult& result) {
+  for (const auto& r : result.rows) {
+    const std::string line = pcl_movers::io::formatTrackRow(r);
+    if (prev_cursor_ >= prev_.lines.size() || prev_.lines[prev_cursor_] != line)
+      throw InputError(o_.out + "/tracks.csv", 0,
+                       "--resume: frame " + std::to_string(i) +
+                           " gives other rows than the interrupted run wrote (different input "
+                           "files or software version); start afresh with --overwrite");
+    ++prev_cursor_;
+  }
+  if (i + 1 == prev_.frames_done) {
+    if (prev_cursor_ != prev_.lines.size())
+      throw InputError(o_.out + "/tracks.csv", 0, "--resume: holds rows this run does not give");
+    tracks_.resume(o_.out + "/tracks.csv", prev_.lines);
+  }
+}
+
+void DetectRun::processFrame(std::size_t i) {
+  pcl::PointCloud<PointT>::Ptr scan(new pcl::PointCloud<PointT>);
+  const bool readable = readFrame(i, *scan);
+  Eigen::Isometry3d pose = estimate_ ? Eigen::Isometry3d::Identity() : reader_.pose(i);
+  double ego_ms = 0;
+  if (estimate_) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const bool blind = !readable || std::none_of(scan->begin(), scan->end(), [](const PointT& p) {
+      return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+    });
+    pose = blind ? ego_.coast() : ego_.estimate(*scan);
+    ego_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  }
+  Detector::FrameResult result;
+  try {
+    detector_.process(scan, pose, reader_.time(i), static_cast<int>(i), result);
+  } catch (const InputError& e) {
+    throw InputError(reader_.framePaths()[i] + ": " + e.what());
+  }
+  if (result.blind && readable) {
+    pcl::console::print_warn(
+        "[pcl_movers_detect] warning: frame %zu (%s) is blind (%s); its "
+        "tracks coast\n",
+        i, reader_.framePaths()[i].c_str(), result.blind_reason.c_str());
+    st_.blind.push_back(i);
+  }
+  reportSensor(i, *scan);
+  for (const auto& t : detector_.getTimings()) st_.stage_ms[t.first].push_back(t.second);
+  if (estimate_ && !result.blind) st_.stage_ms["ego_motion"].push_back(ego_ms);
+  for (const auto& r : result.rows) {
+    st_.track_ids.insert(r.track_id);
+    if (r.mover) st_.mover_ids.insert(r.track_id);
+  }
+  st_.rows += result.rows.size();
+  if (o_.labelled) writeLabelled(i, result);
+  if (i < prev_.frames_done)
+    replayFrame(i, result);
+  else
+    tracks_.writeFrame(result.rows);
+  st_.frames_done = std::max(st_.frames_done, i + 1);
+}
+
+int DetectRun::run() {
+  print_info("Sequence ");
+  print_value("%s", o_.seq.c_str());
+  print_info(": %zu frames, poses: %s, mode: %s\n", reader_.size(), st_.pose_source.c_str(),
+             o_.params.mode.c_str());
+  try {
+    prepare();
+    if (o_.resume)
+      print_info(
+          "Resuming at frame %zu (the %zu done frames are run again and checked against "
+          "tracks.csv)\n",
+          prev_.frames_done, prev_.frames_done);
+    if (o_.resume && prev_.frames_done == 0) tracks_.resume(o_.out + "/tracks.csv", {});
+    st_.frames_done = prev_.frames_done;
+    pcl_movers::tools::ProgressBar progress(reader_.size());
+    for (std::size_t i = 0; i < reader_.size() && g_stop_signal == 0; ++i) {
+      processFrame(i);
       progress.update(i + 1);
+      if (o_.stop_after > 0 && static_cast<long>(i) + 1 == o_.stop_after) g_stop_signal = SIGINT;
     }
     progress.finish();
-
-    // tracks.csv and summary.json go through temporary names: a crash never leaves a truncated
-    // file under the real name.
-    const std::string tracks_path = out + "/tracks.csv", tmp_tracks = tracks_path + ".tmp";
-    created.push_back(tmp_tracks);
-    pcl_movers::io::writeTracks(tmp_tracks, rows);
-    std::ostringstream js;
-    js << "{\n  \"sequence\": \"" << seq << "\",\n  \"frames\": " << reader.size()
-       << ",\n  \"pose_source\": \"" << pose_source << "\",\n  \"rows\": " << rows.size()
-       << ",\n  \"tracks\": " << track_ids.size() << ",\n  \"movers\": " << mover_ids.size()
-       << ",\n  \"timings_ms\": {";
-    bool first = true;
-    std::vector<std::string> order = Detector::stageNames();
-    if (estimate) order.insert(order.begin(), "ego_motion");
-    for (const auto& stage : order) {
-      const auto it = stage_ms.find(stage);
-      if (it == stage_ms.end()) continue;
-      double mean = 0;
-      for (const double v : it->second) mean += v;
-      mean /= std::max<std::size_t>(1, it->second.size());
-      char buf[160];
-      std::snprintf(buf, sizeof(buf), "%s\n    \"%s\": {\"median\": %.3f, \"mean\": %.3f}",
-                    first ? "" : ",", stage.c_str(), median(it->second), mean);
-      js << buf;
-      first = false;
-    }
-    js << "\n  },\n  \"parameters\": " << params.toJson() << "\n}\n";
-    const std::string summary_path = out + "/summary.json", tmp_summary = summary_path + ".tmp";
-    created.push_back(tmp_summary);
-    {
-      std::ofstream f(tmp_summary);
-      f << js.str();
-      if (!f) throw InputError(tmp_summary, 0, "cannot write");
-    }
-    if (fs::exists(tracks_path) && !overwrite) throw InputError(tracks_path, 0, "exists");
-    fs::rename(tmp_tracks, tracks_path);
-    created.push_back(tracks_path);
-    fs::rename(tmp_summary, summary_path);
-    created.push_back(summary_path);
-
-    const auto total = stage_ms["total"];
-    print_info("Wrote ");
-    print_value("%s", tracks_path.c_str());
-    print_info(": %zu rows, %zu tracks, %zu movers; median %.1f ms/frame (pipeline, without I/O)\n",
-               rows.size(), track_ids.size(), mover_ids.size(), median(total));
+    if (g_stop_signal == 0 && st_.blind.size() + st_.bad.size() == reader_.size())
+      throw InputError(o_.seq, 0,
+                       "no frame has a return (all " + std::to_string(reader_.size()) +
+                           " frames are blind or bad)");
   } catch (...) {
-    cleanup();
+    cleanUp();
     throw;
   }
+  const int signal = g_stop_signal;
+  writeSummary(o_, reader_.size(), st_, signal ? "interrupted" : "finished", signal, estimate_);
+  if (signal != 0) {
+    pcl::console::print_warn(
+        "[pcl_movers_detect] interrupted by %s after %zu of %zu frames: "
+        "%s/tracks.csv holds frames 0-%ld; continue with --resume\n",
+        signal == SIGTERM ? "SIGTERM" : "SIGINT", st_.frames_done, reader_.size(), o_.out.c_str(),
+        static_cast<long>(st_.frames_done) - 1);
+    return 128 + signal;
+  }
+  print_info("Wrote ");
+  print_value("%s/tracks.csv", o_.out.c_str());
+  print_info(
+      ": %zu rows, %zu tracks, %zu movers, %zu blind and %zu bad frames; median %.1f "
+      "ms/frame (pipeline, without I/O)\n",
+      st_.rows, st_.track_ids.size(), st_.mover_ids.size(), st_.blind.size(), st_.bad.size(),
+      median(st_.stage_ms["total"]));
   return 0;
+}
+
+int run(int argc, char** argv) {
+  if (pcl_movers::tools::wantsHelp(argc, argv)) {
+    printHelp(argv[0]);
+    return 0;
+  }
+  Options o;
+  if (!parseOptions(argc, argv, o)) return 0;
+  if (!fs::is_directory(o.seq)) throw InputError(o.seq, 0, "sequence folder does not exist");
+  pcl_movers::io::SequenceReader reader(o.seq, o.rate);
+  if (reader.empty())
+    throw InputError(o.seq, 0, "no frames (frames/*.pcd, *.pcd or velodyne/*.bin)");
+  if (fs::exists(o.out) && !fs::is_directory(o.out))
+    throw InputError(o.out, 0, "output exists and is not a folder");
+  if (fs::exists(o.out) && fs::equivalent(o.out, o.seq))
+    throw InputError(o.out, 0, "output folder is the input sequence");
+  installStopHandlers();
+  DetectRun detect(o, reader);
+  return detect.run();
 }
 
 }  // namespace

@@ -56,11 +56,17 @@ void FreeSpaceMap::computeCells(const float* xs, const float* ys, const float* z
   }
 }
 
+void FreeSpaceMap::addBlindScan() {
+  if (scans_.size() >= static_cast<std::size_t>(history_)) scans_.pop_back();
+  scans_.emplace_front();
+}
+
 FreeSpaceMap::Evidence FreeSpaceMap::test(const std::vector<Eigen::Vector3f>& world_points,
                                           int frames_ago) const {
   Evidence e;
   if (frames_ago < 0 || frames_ago >= static_cast<int>(scans_.size())) return e;
   const Scan& s = scans_[static_cast<std::size_t>(frames_ago)];
+  if (s.range.empty()) return e;  // a blind frame saw nothing
   for (const auto& w : world_points) {
     const Eigen::Vector3f q = s.world_to_sensor * w;
     const float rxy = std::sqrt(q.x() * q.x() + q.y() * q.y());

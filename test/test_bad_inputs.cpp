@@ -203,6 +203,17 @@ class BadInputs : public ::testing::Test {
       fs::copy_file(d + "seq_good/poses.txt", s + "poses.txt");
       fs::copy_file(d + "seq_good/times.txt", s + "times.txt");
     }
+    // One truncated frame between good ones: a malformed file, not a blind frame.
+    {
+      const std::string s = d + "seq_truncated_frame/";
+      fs::create_directories(s + "frames");
+      for (int f = 0; f < 4; ++f)
+        fs::copy_file(
+            f == 2 ? d + "truncated.pcd" : d + "seq_good/frames/00000" + std::to_string(f) + ".pcd",
+            s + "frames/00000" + std::to_string(f) + ".pcd");
+      fs::copy_file(d + "seq_good/poses.txt", s + "poses.txt");
+      fs::copy_file(d + "seq_good/times.txt", s + "times.txt");
+    }
     // Good frames with broken side files.
     auto variant = [&](const std::string& name) {
       const std::string s = d + name + "/";
@@ -384,9 +395,9 @@ class BadInputs : public ::testing::Test {
       rows.push_back({name, quote(input) + " " + quote(dst), e, keys, dst});
     };
     // "valid points": the organizer's beam-layout estimate needs a few hundred points.
-    const std::vector<std::string> invalid{"no finite", "no valid",     "nan",
-                                           "finite",    "invalid",      "no points",
-                                           "empty",     "valid points", "infinite"};
+    const std::vector<std::string> invalid{"no finite", "no valid",  "nan",   "finite",
+                                           "invalid",   "no points", "empty", "valid points",
+                                           "infinite",  "no return"};
     row("good sequence (control)", in("seq_good"), Expect::kPass, {});
     row("missing input", in("does_not_exist"), Expect::kFail,
         {"does not exist", "no such", "not found", "cannot open"});
@@ -453,8 +464,11 @@ class BadInputs : public ::testing::Test {
         row("non-monotonic times.txt", "seq_times_nonmonotonic", Expect::kFail,
             {"monoton", "increas", "times.txt"}),
         row("times.txt with text", "seq_times_garbage", Expect::kFail, {"times.txt", "number"}),
-        row("one all-NaN frame among good ones", "seq_nan_frame", Expect::kEither,
-            {"nan", "finite", "000002", "no valid", "empty"}),
+        // A blind frame (no return): a warning, its tracks coast, the run goes on (issue #27).
+        row("one all-NaN frame among good ones", "seq_nan_frame", Expect::kPass, {}),
+        // A malformed frame stays an error naming it (see Detect for --skip-bad-frames).
+        row("one truncated frame among good ones", "seq_truncated_frame", Expect::kFail,
+            {"000002.pcd"}),
     };
   }
 
@@ -491,6 +505,27 @@ TEST_F(BadInputs, Detect) {
                   quote(in("seq_good")) + " " + quote(out("detect_out")) + " --rate -5",
                   Expect::kFail,
                   {"rate"},
+                  out("detect_out")});
+  const std::string o = quote(out("detect_out"));
+  rows.push_back({"truncated frame with --skip-bad-frames",
+                  quote(in("seq_truncated_frame")) + " " + o + " --skip-bad-frames",
+                  Expect::kPass,
+                  {},
+                  out("detect_out")});
+  rows.push_back({"--resume without an earlier run",
+                  quote(in("seq_good")) + " " + o + " --resume",
+                  Expect::kFail,
+                  {"--resume", "summary.json"},
+                  out("detect_out")});
+  rows.push_back({"--resume with --overwrite",
+                  quote(in("seq_good")) + " " + o + " --resume --overwrite",
+                  Expect::kFail,
+                  {"--resume"},
+                  out("detect_out")});
+  rows.push_back({"--stop-after-frames 0",
+                  quote(in("seq_good")) + " " + o + " --stop-after-frames 0",
+                  Expect::kFail,
+                  {"--stop-after-frames"},
                   out("detect_out")});
   rows.push_back({"missing --config",
                   quote(in("seq_good")) + " " + quote(out("detect_out")) + " --config " +

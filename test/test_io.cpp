@@ -129,6 +129,31 @@ TEST(SequenceIO, ViewpointIsThePoseWithoutPosesFile) {
   EXPECT_NEAR(reader.time(2), 0.1, 1e-12);  // from --rate 20 Hz
 }
 
+// Geo-referenced poses (UTM: x 456789 m, y 5432101 m) keep their millimetres through poses.txt and
+// through PCD VIEWPOINTs written by software that prints them in full (PCL parses into floats,
+// which keep only 0.5 m of a northing).
+TEST(SequenceIO, GeoReferencedPosesKeepTheirMillimetres) {
+  TempDir dir;
+  Eigen::Isometry3d pose(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()));
+  pose.translation() = Eigen::Vector3d(456789.1234, 5432101.5678, 250.0012);
+  io::writePoses((dir.path() / "poses.txt").string(), {pose});
+  const auto back = io::readPoses((dir.path() / "poses.txt").string());
+  ASSERT_EQ(back.size(), 1u);
+  EXPECT_LT((back[0].translation() - pose.translation()).norm(), 1e-6);
+  EXPECT_LT((back[0].linear() - pose.linear()).norm(), 1e-8);
+
+  fs::create_directories(dir.path() / "seq" / "frames");
+  writeText(dir.path() / "seq" / "frames" / "000000.pcd",
+            "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 1\n"
+            "HEIGHT 1\nVIEWPOINT 456789.1234 5432101.5678 250.0012 1 0 0 0\nPOINTS 1\n"
+            "DATA ascii\n5 0 -1\n");
+  io::SequenceReader reader((dir.path() / "seq").string());
+  ASSERT_EQ(reader.poseSource(), "viewpoint");
+  EXPECT_NEAR(reader.pose(0).translation().x(), 456789.1234, 1e-6);
+  EXPECT_NEAR(reader.pose(0).translation().y(), 5432101.5678, 1e-6);
+  EXPECT_NEAR(reader.pose(0).translation().z(), 250.0012, 1e-6);
+}
+
 TEST(SequenceIO, ReadsKittiBinAndPcdWithoutIntensity) {
   TempDir dir;
   const float raw[8] = {1, 2, 3, 0.5f, 4, 5, 6, 0.25f};

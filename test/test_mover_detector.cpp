@@ -10,7 +10,9 @@
 
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <map>
+#include <set>
 
 namespace {
 
@@ -48,15 +50,120 @@ struct Score {
   }
 };
 
-}  // namespace
+/** The first frames of the simulator's sample scene (an HDL-64E at 5 m/s, an oncoming car, a
+ * van ahead, a crossing person), in memory. */
+struct SampleFrames {
+  std::vector<pcl::PointCloud<PointT>::Ptr> scans;
+  std::vector<Eigen::Isometry3d> poses;
+  std::vector<double> times;
+};
 
-TEST(MoverDetector, RejectsEmptyScan) {
+SampleFrames simulateSample(int frames) {
+  SampleFrames f;
+  const std::string path = std::string(PCL_MOVERS_SOURCE_DIR) + "/data/scenarios/sample.yaml";
+  pcl_movers::sim::LidarSimulator simulator(pcl_movers::sim::loadScenario(path));
+  for (int i = 0; i < frames; ++i) {
+    f.scans.emplace_back(new pcl::PointCloud<PointT>);
+    std::vector<std::uint32_t> labels;
+    std::vector<GroundTruthObject> truth;
+    Eigen::Isometry3d pose;
+    simulator.simulate(i, *f.scans.back(), labels, truth, pose);
+    f.poses.push_back(pose);
+    f.times.push_back(simulator.time(i));
+  }
+  return f;
+}
+
+/** Rows of a detector run over `f` with every pose moved by `offset`; the frames in `blind` get
+ * a scan without a single return instead of theirs. */
+std::vector<pcl_movers::io::TrackRow> detectRows(const SampleFrames& f,
+                                                 const Eigen::Vector3d& offset,
+                                                 const std::set<int>& blind = {}) {
   Detector detector;
   detector.setParameters(pcl_movers::DetectorParameters());
+  pcl::PointCloud<PointT>::Ptr nothing(new pcl::PointCloud<PointT>);
+  std::vector<pcl_movers::io::TrackRow> rows;
+  for (std::size_t i = 0; i < f.scans.size(); ++i) {
+    Eigen::Isometry3d pose = f.poses[i];
+    pose.translation() += offset;
+    Detector::FrameResult result;
+    const bool is_blind = blind.count(static_cast<int>(i)) > 0;
+    detector.process(is_blind ? nothing : f.scans[i], pose, f.times[i], static_cast<int>(i),
+                     result);
+    EXPECT_EQ(result.blind, is_blind) << "frame " << i;
+    rows.insert(rows.end(), result.rows.begin(), result.rows.end());
+  }
+  return rows;
+}
+
+}  // namespace
+
+// Geo-referenced poses (an INS's UTM coordinates): the same frames with every pose moved by
+// (456789, 5432101, 250) m give the same tracks, their world columns moved by exactly that offset.
+// In single precision a coordinate of 5.4e6 m keeps only 0.5 m: without the detector's local
+// origin the tracks differ (ids, movers, positions by decimetres).
+TEST(MoverDetector, GeoReferencedPosesGiveTheSameTracks) {
+  const SampleFrames frames = simulateSample(20);
+  const Eigen::Vector3d offset(456789.0, 5432101.0, 250.0);
+  const auto local = detectRows(frames, Eigen::Vector3d::Zero());
+  const auto utm = detectRows(frames, offset);
+  ASSERT_EQ(local.size(), utm.size());
+  ASSERT_GT(local.size(), 100u);
+  int movers = 0;
+  for (std::size_t k = 0; k < local.size(); ++k) {
+    const auto &a = local[k], &b = utm[k];
+    SCOPED_TRACE("row " + std::to_string(k) + " frame " + std::to_string(a.frame));
+    ASSERT_EQ(a.frame, b.frame);
+    ASSERT_EQ(a.track_id, b.track_id);
+    EXPECT_EQ(a.mover, b.mover);
+    movers += a.mover;
+    EXPECT_EQ(a.points, b.points);
+    for (const auto& [u, v] :
+         {std::pair(a.x, b.x), std::pair(a.y, b.y), std::pair(a.z, b.z), std::pair(a.vx, b.vx),
+          std::pair(a.vy, b.vy), std::pair(a.length, b.length), std::pair(a.width, b.width),
+          std::pair(a.height, b.height), std::pair(a.yaw, b.yaw),
+          std::pair(a.similarity, b.similarity)})
+      EXPECT_NEAR(u, v, 1e-3);
+    EXPECT_NEAR(b.wx - a.wx, offset.x(), 1e-3);
+    EXPECT_NEAR(b.wy - a.wy, offset.y(), 1e-3);
+    EXPECT_NEAR(b.wz - a.wz, offset.z(), 1e-3);
+  }
+  EXPECT_GT(movers, 10) << "the scene's movers must be found for the comparison to mean much";
+}
+
+// A scan without a single return (a covered sensor, a dropped batch of packets) is a frame with
+// no observations: it returns no rows, the tracks coast through it, and a mover keeps its track.
+TEST(MoverDetector, BlindFramesCoast) {
+  const SampleFrames frames = simulateSample(24);
+  const std::set<int> blind{12, 13};
+  const auto all = detectRows(frames, Eigen::Vector3d::Zero());
+  const auto gappy = detectRows(frames, Eigen::Vector3d::Zero(), blind);
+  for (const auto& r : gappy) EXPECT_EQ(blind.count(r.frame), 0u) << "a row in a blind frame";
+  // Mover tracks before the gap.
+  std::map<int, int> before;  // track id → mover rows before the gap
+  for (const auto& r : all)
+    if (r.frame < 12 && r.mover) ++before[r.track_id];
+  ASSERT_GE(before.size(), 2u) << "the scene's movers are found before the gap";
+  // After the gap the same ids are reported as movers again, in most frames they were before.
+  for (const auto& [id, n] : before) {
+    int all_after = 0, gappy_after = 0;
+    for (const auto& r : all) all_after += r.frame > 13 && r.mover && r.track_id == id;
+    for (const auto& r : gappy) gappy_after += r.frame > 13 && r.mover && r.track_id == id;
+    if (all_after == 0) continue;  // left the scene anyway
+    EXPECT_GE(gappy_after, all_after - 2) << "track " << id << " lost across the blind frames";
+  }
+  // A scan with points but none finite is blind too, and so is the first frame.
+  Detector detector;
+  detector.setParameters(pcl_movers::DetectorParameters());
+  pcl::PointCloud<PointT>::Ptr nan_scan(new pcl::PointCloud<PointT>);
+  PointT nan_point;
+  nan_point.x = nan_point.y = nan_point.z = std::numeric_limits<float>::quiet_NaN();
+  nan_scan->resize(1000, nan_point);
   Detector::FrameResult result;
-  pcl::PointCloud<PointT>::Ptr empty(new pcl::PointCloud<PointT>);
-  EXPECT_THROW(detector.process(empty, Eigen::Isometry3d::Identity(), 0.0, 0, result),
-               pcl_movers::InputError);
+  EXPECT_NO_THROW(detector.process(nan_scan, Eigen::Isometry3d::Identity(), 0.0, 0, result));
+  EXPECT_TRUE(result.blind);
+  EXPECT_TRUE(result.rows.empty());
+  EXPECT_TRUE(result.organized && result.organized->empty());
 }
 
 TEST(MoverDetector, RejectsBadParameters) {

@@ -124,6 +124,11 @@ class EgoMotionEstimator {
    * correspondences) rather than failing the whole sequence. */
   Eigen::Isometry3d estimate(const PointCloud& scan);
 
+  /** \brief A frame without a scan (a blind frame: no return at all): returns its pose predicted
+   * with the constant-velocity motion (the last pose without it), and leaves the map unchanged.
+   * Before the first scan it returns the identity and the next scan still defines the world. */
+  Eigen::Isometry3d coast();
+
   /** \brief Forgets the map and the motion; the next scan becomes the world origin. */
   void reset();
 

@@ -68,6 +68,10 @@ class FreeSpaceMap {
   template <typename PointT>
   void addScan(const pcl::PointCloud<PointT>& scan, const Eigen::Isometry3d& pose);
 
+  /** \brief Adds a frame without a scan (a blind frame: no return at all), so that `frames_ago`
+   * keeps counting frames; tests against it find nothing (an empty Evidence). */
+  void addBlindScan();
+
   /** \brief Scans stored (≤ history). Index 0 is the latest. */
   int size() const { return static_cast<int>(scans_.size()); }
 
@@ -88,7 +92,7 @@ class FreeSpaceMap {
  protected:
   struct Scan {
     Eigen::Isometry3f world_to_sensor = Eigen::Isometry3f::Identity();
-    std::vector<float> range;  ///< 0 = no return
+    std::vector<float> range;  ///< 0 = no return; empty for a blind frame (addBlindScan())
   };
   /** \brief cells[i] = row · cols + column of the direction of point i (sensor frame), or -1
    * (not finite, under 0.5 m, outside the rows); ranges[i] = its range. */

@@ -84,7 +84,15 @@ class MoverDetector {
     std::vector<int> track_ids;
     /** Number of clusters the segmentation produced (before size filtering). */
     int clusters = 0;
+    /** A frame without observations: no finite return, or (sensor "auto") too few returns to
+     * estimate the beam layout from. No rows, `organized` is empty, the tracks coasted. */
+    bool blind = false;
+    std::string blind_reason;  ///< why the frame is blind ("no return", ...); empty otherwise
   };
+
+  /** \brief Fewest finite returns of a scan the beam layout is estimated from (sensor "auto");
+   * a scan with fewer is a blind frame while no layout is known, not an error. */
+  static constexpr long kMinReturnsToEstimate = 2000;
 
   MoverDetector() = default;
 
@@ -102,9 +110,27 @@ class MoverDetector {
   const SensorModel& getSensorModel() const { return sensor_model_; }
 
   /** \brief Runs the pipeline on one scan (sensor frame) with its sensor→world pose.
-   * Throws InputError when the scan is empty or has no finite point. */
-  void process(const PointCloudConstPtr& scan, const Eigen::Isometry3d& pose, double time,
+   * World poses may be geo-referenced (UTM-sized translations): the detector works relative to
+   * its origin (getOrigin()) and the rows' world columns add it back in double precision.
+   * A scan without a finite point (empty, all NaN) or, while the beam layout is still to be
+   * estimated (sensor "auto"), with fewer than kMinReturnsToEstimate is a blind frame
+   * (FrameResult::blind): the tracks coast to `time` and no row is returned. Throws InputError
+   * when the scan cannot be organized (no beam structure, no point in the sensor's view). */
+  void process(const PointCloudConstPtr& scan, const Eigen::Isometry3d& world_pose, double time,
                int frame, FrameResult& result);
+
+  /** \brief World position [m] that every single-precision quantity of the detector (world
+   * clusters, the tracker's tracks and models, the free-space map) is relative to: the
+   * translation of the first pose given to process() after construction, setParameters() or
+   * reset(), unless set with setOrigin(). Tracker positions (getTracker()) plus this origin are
+   * world positions. */
+  const Eigen::Vector3d& getOrigin() const { return origin_; }
+  /** \brief Fixes the origin before the first frame (e.g. a map's origin); process() then keeps
+   * it instead of taking the first pose's translation. */
+  void setOrigin(const Eigen::Vector3d& origin) {
+    origin_ = origin;
+    has_origin_ = true;
+  }
 
   /** \brief (stage, milliseconds) of the last process(): organize, ground, segment, transform,
    * track, total. */
@@ -131,13 +157,24 @@ class MoverDetector {
                               const Eigen::Isometry3d& pose, PointCloud& world,
                               std::vector<pcl::PointIndices>& world_clusters);
 
-  /** \brief Forgets all tracks (start of a new sequence). */
+  /** \brief Forgets all tracks and the origin (start of a new sequence). */
   void reset() {
     tracker_.reset();
     free_space_.clear();
+    origin_.setZero();
+    has_origin_ = false;
   }
 
  protected:
+  /** \brief `world_pose` relative to the origin (taken from it when none is set yet). */
+  Eigen::Isometry3d localPose(const Eigen::Isometry3d& world_pose);
+
+  /** \brief Why `scan` is a blind frame, or "" when it can be processed; estimates the beam
+   * layout from it when that is still to be done (sensor "auto"). */
+  std::string blindReason(const PointCloudConstPtr& scan);
+  /** \brief A blind frame: the tracks coast to `time`, the free-space map counts the frame. */
+  void coast(const Eigen::Isometry3d& pose, double time, FrameResult& result);
+
   /** \brief Organizes `scan` into a range image (copy when it is already organized). */
   PointCloudConstPtr organize(const PointCloudConstPtr& scan);
 
@@ -159,6 +196,8 @@ class MoverDetector {
   };
 
   DetectorParameters parameters_;
+  Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();  ///< see getOrigin()
+  bool has_origin_ = false;
   SensorModel sensor_model_;
   bool has_sensor_model_ = false;
   MoverTracker<PointT> tracker_;

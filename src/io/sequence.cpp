@@ -231,11 +231,30 @@ void readKittiBin(const std::string& path, pcl::PointCloud<PointT>& cloud) {
   cloud.sensor_orientation_ = Eigen::Quaternionf::Identity();
 }
 
-Eigen::Isometry3d isometryFromViewpoint(const Eigen::Vector4f& origin,
+/** The translation of a PCD's VIEWPOINT line in double precision (PCL parses it into floats,
+ * which keep only ~0.5 m of a UTM northing); `fallback` when the header has no readable one. */
+Eigen::Vector3d viewpointTranslation(const std::string& path, const Eigen::Vector3d& fallback) {
+  std::ifstream in(path, std::ios::binary);
+  std::string line;
+  for (int n = 0; n < 64 && std::getline(in, line); ++n) {
+    std::istringstream tokens(line);
+    tokens.imbue(std::locale::classic());
+    std::string key;
+    tokens >> key;
+    if (key == "DATA") break;
+    if (key != "VIEWPOINT") continue;
+    Eigen::Vector3d t;
+    if (tokens >> t.x() >> t.y() >> t.z() && t.allFinite()) return t;
+    break;
+  }
+  return fallback;
+}
+
+Eigen::Isometry3d isometryFromViewpoint(const std::string& path, const Eigen::Vector4f& origin,
                                         const Eigen::Quaternionf& q) {
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
   pose.linear() = q.cast<double>().normalized().toRotationMatrix();
-  pose.translation() = origin.head<3>().cast<double>();
+  pose.translation() = viewpointTranslation(path, origin.head<3>().cast<double>());
   return pose;
 }
 
@@ -343,10 +362,17 @@ std::vector<Eigen::Isometry3d> readPoses(const std::string& path) {
 void writePoses(const std::string& path, const std::vector<Eigen::Isometry3d>& poses) {
   std::ofstream out(path);
   if (!out) throw InputError(path, 0, "cannot write pose file");
-  out << std::scientific << std::setprecision(9);
+  out << std::scientific;
   for (const auto& pose : poses) {
     for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 4; ++c) out << pose.matrix()(r, c) << ((r == 2 && c == 3) ? '\n' : ' ');
+      for (int c = 0; c < 4; ++c) {
+        // 10 significant digits, more for geo-referenced translations: at least micrometres
+        // (5.432101e6 m needs 13). Values below 10^4 are written as they always were.
+        const double v = pose.matrix()(r, c);
+        const int exponent = v != 0 ? static_cast<int>(std::floor(std::log10(std::abs(v)))) : 0;
+        out << std::setprecision(std::max(9, std::min(16, exponent + 6))) << v
+            << ((r == 2 && c == 3) ? '\n' : ' ');
+      }
   }
   if (!out) throw InputError(path, 0, "write failed");
 }
@@ -415,7 +441,7 @@ void SequenceReader::open(const std::string& folder, double rate_hz) {
     if (!isIdentityViewpoint(origin, orientation)) {
       for (const auto& path : frame_paths_) {
         readPcdHeader(path, header, origin, orientation);
-        poses_.push_back(isometryFromViewpoint(origin, orientation));
+        poses_.push_back(isometryFromViewpoint(path, origin, orientation));
       }
       pose_source_ = "viewpoint";
     }

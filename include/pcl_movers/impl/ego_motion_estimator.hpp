@@ -275,6 +275,14 @@ Eigen::Isometry3d EgoMotionEstimator<PointT>::estimate(const PointCloud& scan) {
   return pose_;
 }
 
+template <typename PointT>
+Eigen::Isometry3d EgoMotionEstimator<PointT>::coast() {
+  if (frames_ == 0) return Eigen::Isometry3d::Identity();
+  if (constant_velocity_) pose_ = pose_ * motion_;
+  ++frames_;
+  return pose_;
+}
+
 }  // namespace pcl_movers
 
 #define PCL_MOVERS_INSTANTIATE_EgoMotionEstimator(T) \

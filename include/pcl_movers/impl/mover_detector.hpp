@@ -31,8 +31,7 @@ void MoverDetector<PointT>::setParameters(const DetectorParameters& parameters) 
   parameters.validate();
   parameters_ = parameters;
   tracker_.setParameters(parameters);
-  tracker_.reset();
-  free_space_.clear();
+  reset();
   if (!has_sensor_model_ && parameters.sensor != "auto") {
     sensor_model_ = SensorModel::fromName(parameters.sensor);
     organizer_.object.reset();
@@ -40,15 +39,56 @@ void MoverDetector<PointT>::setParameters(const DetectorParameters& parameters) 
 }
 
 template <typename PointT>
+Eigen::Isometry3d MoverDetector<PointT>::localPose(const Eigen::Isometry3d& world_pose) {
+  if (!has_origin_) {
+    origin_ = world_pose.translation();
+    has_origin_ = true;
+  }
+  Eigen::Isometry3d local = world_pose;
+  local.translation() -= origin_;
+  return local;
+}
+
+template <typename PointT>
+std::string MoverDetector<PointT>::blindReason(const PointCloudConstPtr& scan) {
+  const auto finite = [](const PointT& pt) {
+    return std::isfinite(pt.x) && std::isfinite(pt.y) && std::isfinite(pt.z);
+  };
+  // Only whether there is one: stops at the first finite point instead of reading all ~140k.
+  if (!scan || std::none_of(scan->points.begin(), scan->points.end(), finite)) return "no return";
+  if ((scan->isOrganized() && scan->height > 1) || has_sensor_model_ || sensor_model_.rows() > 0)
+    return "";
+  // "auto": the beam layout is estimated from the first scan that has enough returns for it.
+  try {
+    setSensorModel(SensorModel::estimate(*scan));
+  } catch (const InputError& e) {
+    const auto returns = std::count_if(scan->points.begin(), scan->points.end(), finite);
+    if (returns >= kMinReturnsToEstimate) throw;  // returns enough, but no beam structure
+    return std::to_string(returns) + " returns, too few to estimate the beam layout from";
+  }
+  return "";
+}
+
+template <typename PointT>
+void MoverDetector<PointT>::coast(const Eigen::Isometry3d& pose, double time, FrameResult& result) {
+  result.blind = true;
+  result.organized.reset(new PointCloud);
+  if (parameters_.free_space_lag > 0) {
+    free_space_.addBlindScan();  // keeps the map's frame lags in step with the frames
+    tracker_.setFreeSpaceMap(&free_space_);
+  } else {
+    tracker_.setFreeSpaceMap(nullptr);
+  }
+  // No cluster: every track is predicted to `time` and counts a missed frame.
+  tracker_.update(PointCloudConstPtr(new PointCloud), {}, pose.translation(), time);
+}
+
+template <typename PointT>
 typename MoverDetector<PointT>::PointCloudConstPtr MoverDetector<PointT>::organize(
     const PointCloudConstPtr& scan) {
   if (scan->isOrganized() && scan->height > 1) return scan;
-  if (!has_sensor_model_ && sensor_model_.rows() == 0) {
-    // "auto": estimate the beam layout once, from the first unorganized scan.
-    sensor_model_ = SensorModel::estimate(*scan);
-    has_sensor_model_ = true;
-    organizer_.object.reset();
-  }
+  if (!has_sensor_model_ && sensor_model_.rows() == 0)
+    throw InputError("MoverDetector: no sensor model (process() estimates it first)");
   // The previous frame's range image is written over when neither the caller nor a stage holds
   // it any more: no allocation, page faults and construction of ~140k points per HDL-64E frame.
   if (ground_.object) ground_.object->setInputCloud(PointCloudConstPtr());
@@ -149,30 +189,33 @@ void MoverDetector<PointT>::clustersToWorld(const PointCloud& organized,
 }
 
 template <typename PointT>
-void MoverDetector<PointT>::process(const PointCloudConstPtr& scan, const Eigen::Isometry3d& pose,
-                                    double time, int frame, FrameResult& result) {
+void MoverDetector<PointT>::process(const PointCloudConstPtr& scan,
+                                    const Eigen::Isometry3d& world_pose, double time, int frame,
+                                    FrameResult& result) {
   using Clock = std::chrono::steady_clock;
   auto ms = [](Clock::time_point a, Clock::time_point b) {
     return std::chrono::duration<double, std::milli>(b - a).count();
   };
   const auto& p = parameters_;
-  if (!scan || scan->empty()) throw InputError("frame " + std::to_string(frame) + ": empty scan");
+  // Every float quantity below is relative to the origin (UTM-sized poses lose their centimetres
+  // in single precision); world outputs get it back in double.
+  const Eigen::Isometry3d pose = localPose(world_pose);
 
   result = FrameResult();
   result.frame = frame;
   result.time = time;
   timings_.clear();
+  result.blind_reason = blindReason(scan);
+  if (!result.blind_reason.empty()) {
+    coast(pose, time, result);
+    return;
+  }
 
   // Organize.
   const auto t0 = Clock::now();
   const PointCloudConstPtr organized = organize(scan);
   result.organized = organized;
   const std::size_t n = organized->size();
-  // Only whether there is one: stops at the first finite point instead of reading all ~140k.
-  if (std::none_of(organized->points.begin(), organized->points.end(), [](const PointT& pt) {
-        return std::isfinite(pt.x) && std::isfinite(pt.y) && std::isfinite(pt.z);
-      }))
-    throw InputError("frame " + std::to_string(frame) + ": no finite point in the scan");
 
   // Ground removal: indices of the non-ground points.
   const auto t1 = Clock::now();
@@ -273,9 +316,10 @@ void MoverDetector<PointT>::process(const PointCloudConstPtr& scan, const Eigen:
     row.x = local.x();
     row.y = local.y();
     row.z = local.z();
-    row.wx = cr.features.centroid.x();
-    row.wy = cr.features.centroid.y();
-    row.wz = cr.features.centroid.z();
+    const Eigen::Vector3d world = cr.features.centroid + origin_;
+    row.wx = world.x();
+    row.wy = world.y();
+    row.wz = world.z();
     row.vx = cr.velocity.x();
     row.vy = cr.velocity.y();
     row.speed = cr.velocity.norm();
