@@ -518,11 +518,17 @@ void DetectRun::reportSensor(std::size_t i, const pcl::PointCloud<PointT>& scan)
   if (model.rows() == 0) return;
   sensor_reported_ = true;
   if (o_.params.sensor != "auto") return;
-  char buf[200];
-  std::snprintf(buf, sizeof(buf), "estimated from %s: %d beams, %.2f to %.2f deg, %d columns",
-                fs::path(reader_.framePaths()[i]).filename().c_str(), model.rows(),
-                model.elevations().front() * 180.0 / M_PI, model.elevations().back() * 180.0 / M_PI,
-                model.columns());
+  const auto& est = detector_.getEstimatedSensorModel();
+  char buf[300];
+  const int n =
+      std::snprintf(buf, sizeof(buf), "estimated from %s: %d beams, %.2f to %.2f deg, %d columns",
+                    fs::path(reader_.framePaths()[i]).filename().c_str(), est.rows(),
+                    est.elevations().front() * 180.0 / M_PI, est.elevations().back() * 180.0 / M_PI,
+                    est.columns());
+  if (model.name() != est.name() && n > 0 && n < static_cast<int>(sizeof(buf)))
+    std::snprintf(buf + n, sizeof(buf) - static_cast<std::size_t>(n),
+                  "; recognized as %s (its calibration and %d columns used)", model.name().c_str(),
+                  model.columns());
   st_.sensor = std::string("auto: ") + buf;
   print_info("Beam layout %s\n", buf);
 }
