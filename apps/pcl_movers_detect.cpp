@@ -80,6 +80,8 @@ void printHelp(const char* name) {
      << "                     (same SEQ and options; the done frames are run again, unwritten)\n"
      << "  --print-config     print the parameters as a config file and exit\n"
      << "  -h, --help         this help\n\n"
+     << "--sensor auto estimates the beam layout of unorganized scans from the first one and\n"
+     << "uses a preset's calibration when it recognizes its beams (organized scans keep theirs).\n"
      << "A frame without returns (or, with --sensor auto, too few to estimate the beam layout\n"
      << "from) is blind: a warning, its tracks coast, the run goes on. SIGINT/SIGTERM stop the "
         "run\n"

@@ -252,6 +252,25 @@ TEST(MoverDetector, BlindFramesCoast) {
   EXPECT_TRUE(result.blind);
   EXPECT_TRUE(result.rows.empty());
   EXPECT_TRUE(result.organized && result.organized->empty());
+  // With sensor auto, an unorganized scan with too few returns to estimate the beam layout from
+  // is blind too; the layout comes from the first scan that has enough.
+  pcl::PointCloud<PointT>::Ptr sparse(new pcl::PointCloud<PointT>);
+  for (int k = 0; k < 50; ++k) {
+    PointT p;
+    p.x = 10.f + 0.1f * float(k);
+    p.y = 0.f;
+    p.z = -1.7f;
+    sparse->push_back(p);
+  }
+  Detector automatic;
+  automatic.setParameters(pcl_movers::DetectorParameters());
+  automatic.process(sparse, Eigen::Isometry3d::Identity(), 0.0, 0, result);
+  EXPECT_TRUE(result.blind);
+  EXPECT_NE(result.blind_reason.find("too few"), std::string::npos) << result.blind_reason;
+  const SampleFrames vlp = simulateUnorganized(pcl_movers::SensorModel::vlp16(), 1);
+  automatic.process(vlp.scans[0], vlp.poses[0], 0.1, 1, result);
+  EXPECT_FALSE(result.blind);
+  EXPECT_EQ(automatic.getSensorModel().name(), "vlp16");
 }
 
 TEST(MoverDetector, RejectsBadParameters) {

@@ -313,9 +313,7 @@ struct DetectorParameters {
 // --------------------------------------------------------------------------- implementation
 template <typename F>
 void DetectorParameters::forEachParameter(F&& f) {
-  f("sensor", sensor,
-    "beam layout of unorganized scans: auto (estimated; a preset recognized), hdl64, hdl32, "
-    "vlp16, os1_64, ladar2d");
+  f("sensor", sensor, "layout of unorganized scans: auto, hdl64, hdl32, vlp16, os1_64, ladar2d");
   f("sensor_height", sensor_height, "sensor height above the ground [m]");
   f("ground_distance", ground_distance, "max distance of ground points from their plane [m]");
   f("ground_max_slope_deg", ground_max_slope_deg, "max ground slope [deg]");
