@@ -80,6 +80,8 @@ void printHelp(const char* name) {
      << "                     (same SEQ and options; the done frames are run again, unwritten)\n"
      << "  --print-config     print the parameters as a config file and exit\n"
      << "  -h, --help         this help\n\n"
+     << "--sensor auto estimates the beam layout of unorganized scans from the first one and\n"
+     << "uses a preset's calibration when it recognizes its beams (organized scans keep theirs).\n"
      << "A frame without returns (or, with --sensor auto, too few to estimate the beam layout\n"
      << "from) is blind: a warning, its tracks coast, the run goes on. SIGINT/SIGTERM stop the "
         "run\n"
@@ -518,11 +520,17 @@ void DetectRun::reportSensor(std::size_t i, const pcl::PointCloud<PointT>& scan)
   if (model.rows() == 0) return;
   sensor_reported_ = true;
   if (o_.params.sensor != "auto") return;
-  char buf[200];
-  std::snprintf(buf, sizeof(buf), "estimated from %s: %d beams, %.2f to %.2f deg, %d columns",
-                fs::path(reader_.framePaths()[i]).filename().c_str(), model.rows(),
-                model.elevations().front() * 180.0 / M_PI, model.elevations().back() * 180.0 / M_PI,
-                model.columns());
+  const auto& est = detector_.getEstimatedSensorModel();
+  char buf[300];
+  const int n =
+      std::snprintf(buf, sizeof(buf), "estimated from %s: %d beams, %.2f to %.2f deg, %d columns",
+                    fs::path(reader_.framePaths()[i]).filename().c_str(), est.rows(),
+                    est.elevations().front() * 180.0 / M_PI, est.elevations().back() * 180.0 / M_PI,
+                    est.columns());
+  if (model.name() != est.name() && n > 0 && n < static_cast<int>(sizeof(buf)))
+    std::snprintf(buf + n, sizeof(buf) - static_cast<std::size_t>(n),
+                  "; recognized as %s (its calibration and %d columns used)", model.name().c_str(),
+                  model.columns());
   st_.sensor = std::string("auto: ") + buf;
   print_info("Beam layout %s\n", buf);
 }

@@ -52,10 +52,11 @@ void printHelp(const char* argv0) {
       "  poses.txt, times.txt and objects.txt of a sequence folder are copied along.\n\n"
       "Options:\n"
       "  --sensor S      beam layout: %s (default %s;\n"
-      "                  auto estimates it from the first scan and uses it for all; hdl64 is\n"
-      "                  KITTI's calibrated HDL-64E)\n"
+      "                  auto estimates it from the first scan and uses it for all, or the\n"
+      "                  preset whose beams it recognizes; hdl64 is KITTI's calibrated HDL-64E)\n"
       "  --columns N     azimuth columns per image (default %d = the sensor's: hdl64 2200,\n"
-      "                  hdl32/os1_64/auto 2048, vlp16 1800, ladar2d 360)\n"
+      "                  hdl32/os1_64 2048, vlp16 1800, ladar2d 360, auto: the beams' firings\n"
+      "                  per turn + 2 %%)\n"
       "  --max-range M   leave out points further than M metres (default %g = no limit)\n"
       "  --overwrite     replace an existing output file or non-empty output folder\n"
       "  -h, --help      this help\n",
@@ -160,12 +161,21 @@ int run(int argc, char** argv) {
     Cloud image;
     organizer.organize(image);
     if (opt.sensor == "auto" && !organizer.wasPassThrough() && !organizer.hasSensorModel()) {
-      // One layout for the whole sequence: the first scan's. Keeps every frame the same size.
-      organizer.setSensorModel(organizer.getSensorModel());
-      pcl::console::print_info("estimated beam layout from %s: %d beams, %.2f to %.2f deg\n",
-                               inputs[i].c_str(), organizer.getSensorModel().rows(),
-                               organizer.getSensorModel().elevations().front() * 180.0 / M_PI,
-                               organizer.getSensorModel().elevations().back() * 180.0 / M_PI);
+      // One layout for the whole sequence: the first scan's, or the preset it is recognized as
+      // (as pcl_movers_detect does). Keeps every frame the same size.
+      const pcl_movers::SensorModel estimated = organizer.getSensorModel();
+      const pcl_movers::SensorModel model = pcl_movers::SensorModel::recognize(estimated);
+      organizer.setSensorModel(model);
+      pcl::console::print_info(
+          "estimated beam layout from %s: %d beams, %.2f to %.2f deg, %d columns",
+          inputs[i].c_str(), estimated.rows(), estimated.elevations().front() * 180.0 / M_PI,
+          estimated.elevations().back() * 180.0 / M_PI, estimated.columns());
+      if (model.name() != estimated.name()) {
+        pcl::console::print_info("; recognized as %s (its calibration and %d columns used)",
+                                 model.name().c_str(), model.columns());
+        organizer.organize(image);
+      }
+      pcl::console::print_info("\n");
     }
     points += cloud->size();
     passed += organizer.wasPassThrough();

@@ -122,6 +122,26 @@ TEST(FreeSpaceMap, MoverInPreviouslySeenFreeSpaceIsSeenThrough) {
   EXPECT_GT(ahead.fraction(), 0.3);
 }
 
+// A blind frame (no return at all) takes a place in the history, so that `frames_ago` keeps
+// counting frames, and says nothing: it never sees anything through.
+TEST(FreeSpaceMap, BlindScanKeepsTheLagsAndGivesNoEvidence) {
+  pcl_movers::FreeSpaceMap map;
+  map.setHistory(6);
+  std::vector<Scan> scans;
+  for (int f = 0; f <= 5; ++f) {
+    const std::vector<Box> scene{{{15, -4 + 0.6 * f}, 1.8, 4.5, 1.5}};
+    scans.push_back(castScan(Eigen::Vector2d(0.8 * f, 0), scene));
+    if (f == 3)
+      map.addBlindScan();
+    else
+      map.addScan(*scans.back().sensor_points, scans.back().pose);
+  }
+  const auto points = worldPointsOf(scans.back(), 0);
+  EXPECT_EQ(map.size(), 6);
+  EXPECT_EQ(map.test(points, 2).tested, 0);        // frame 3, blind
+  EXPECT_GT(map.test(points, 5).fraction(), 0.3);  // frame 0, as without the blind frame
+}
+
 // A car approaching head-on from beyond an 80 m sensor range: 5 frames ago the rays through the
 // space it fills now returned nothing (neither it nor the ground was within range), so by
 // default that space is unknown; with setNoReturnRange(80) it was seen empty. Only below the

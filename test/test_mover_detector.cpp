@@ -8,10 +8,12 @@
 #include <pcl_movers/sim/lidar_simulator.h>
 #include <pcl_movers/sim/scenario.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <limits>
 #include <map>
+#include <random>
 #include <set>
 
 namespace {
@@ -96,7 +98,93 @@ std::vector<pcl_movers::io::TrackRow> detectRows(const SampleFrames& f,
   return rows;
 }
 
+/** Frames of the sample scene as `sensor` records them, unorganized: no-return cells dropped, the
+ * point order shuffled. */
+SampleFrames simulateUnorganized(const pcl_movers::SensorModel& sensor, int frames) {
+  SampleFrames f;
+  const std::string path = std::string(PCL_MOVERS_SOURCE_DIR) + "/data/scenarios/sample.yaml";
+  pcl_movers::sim::LidarSimulator simulator(pcl_movers::sim::loadScenario(path));
+  simulator.setSensor(sensor);
+  std::mt19937 rng(3);
+  for (int i = 0; i < frames; ++i) {
+    pcl::PointCloud<PointT> organized;
+    std::vector<std::uint32_t> labels;
+    std::vector<GroundTruthObject> truth;
+    Eigen::Isometry3d pose;
+    simulator.simulate(i, organized, labels, truth, pose);
+    f.scans.emplace_back(new pcl::PointCloud<PointT>);
+    for (const auto& p : organized)
+      if (std::isfinite(p.x)) f.scans.back()->push_back(p);
+    std::shuffle(f.scans.back()->begin(), f.scans.back()->end(), rng);
+    f.poses.push_back(pose);
+    f.times.push_back(simulator.time(i));
+  }
+  return f;
+}
+
+/** Mover rows of a run over `f` with `params` (and `sensor` set on the detector when given). */
+std::vector<pcl_movers::io::TrackRow> moverRows(const SampleFrames& f,
+                                                const pcl_movers::DetectorParameters& params,
+                                                const pcl_movers::SensorModel* sensor = nullptr) {
+  Detector detector;
+  if (sensor) detector.setSensorModel(*sensor);
+  detector.setParameters(params);
+  std::vector<pcl_movers::io::TrackRow> rows;
+  for (std::size_t i = 0; i < f.scans.size(); ++i) {
+    Detector::FrameResult result;
+    detector.process(f.scans[i], f.poses[i], f.times[i], static_cast<int>(i), result);
+    for (const auto& r : result.rows)
+      if (r.mover) rows.push_back(r);
+  }
+  return rows;
+}
+
+/** Fraction of the rows of `a` with a row of `b` in the same frame within 1 m. */
+double matchedFraction(const std::vector<pcl_movers::io::TrackRow>& a,
+                       const std::vector<pcl_movers::io::TrackRow>& b) {
+  int matched = 0;
+  for (const auto& r : a)
+    for (const auto& q : b)
+      if (q.frame == r.frame && std::hypot(q.x - r.x, q.y - r.y) < 1.0) {
+        ++matched;
+        break;
+      }
+  return a.empty() ? 0.0 : double(matched) / double(a.size());
+}
+
 }  // namespace
+
+// sensor "auto" (the default) on unorganized scans of the presets: the estimated layout is
+// recognized and the detection is the preset's; on a sensor no preset describes the estimated
+// layout is used and finds the same movers as the true layout.
+TEST(MoverDetector, SensorAutoDetectsLikeTheRightLayout) {
+  pcl_movers::DetectorParameters automatic;
+  ASSERT_EQ(automatic.sensor, "auto");
+  for (const char* name : {"vlp16", "hdl32", "os1_64"}) {
+    SCOPED_TRACE(name);
+    const SampleFrames frames = simulateUnorganized(pcl_movers::SensorModel::fromName(name), 15);
+    pcl_movers::DetectorParameters preset;
+    preset.sensor = name;
+    const auto with_auto = moverRows(frames, automatic), with_preset = moverRows(frames, preset);
+    EXPECT_GT(with_preset.size(), 5u) << "the scene's movers must be found";
+    ASSERT_EQ(with_auto.size(), with_preset.size());
+    for (std::size_t k = 0; k < with_auto.size(); ++k) {
+      EXPECT_EQ(with_auto[k].track_id, with_preset[k].track_id);
+      EXPECT_NEAR(with_auto[k].x, with_preset[k].x, 1e-3);
+    }
+  }
+  // 40 uneven beams from +8° to -22°, 1500 columns: estimated, not recognized.
+  std::vector<float> elevations;
+  for (int k = 0; k < 40; ++k)
+    elevations.push_back(static_cast<float>((8.0 - 0.55 * k - 0.0055 * k * k) * M_PI / 180));
+  const pcl_movers::SensorModel custom(elevations, 1500);
+  const SampleFrames frames = simulateUnorganized(custom, 15);
+  const auto with_auto = moverRows(frames, automatic);
+  const auto with_truth = moverRows(frames, automatic, &custom);
+  ASSERT_GT(with_truth.size(), 5u);
+  EXPECT_GE(matchedFraction(with_truth, with_auto), 0.8);
+  EXPECT_GE(matchedFraction(with_auto, with_truth), 0.8);
+}
 
 // Geo-referenced poses (an INS's UTM coordinates): the same frames with every pose moved by
 // (456789, 5432101, 250) m give the same tracks, their world columns moved by exactly that offset.
@@ -164,6 +252,25 @@ TEST(MoverDetector, BlindFramesCoast) {
   EXPECT_TRUE(result.blind);
   EXPECT_TRUE(result.rows.empty());
   EXPECT_TRUE(result.organized && result.organized->empty());
+  // With sensor auto, an unorganized scan with too few returns to estimate the beam layout from
+  // is blind too; the layout comes from the first scan that has enough.
+  pcl::PointCloud<PointT>::Ptr sparse(new pcl::PointCloud<PointT>);
+  for (int k = 0; k < 50; ++k) {
+    PointT p;
+    p.x = 10.f + 0.1f * float(k);
+    p.y = 0.f;
+    p.z = -1.7f;
+    sparse->push_back(p);
+  }
+  Detector automatic;
+  automatic.setParameters(pcl_movers::DetectorParameters());
+  automatic.process(sparse, Eigen::Isometry3d::Identity(), 0.0, 0, result);
+  EXPECT_TRUE(result.blind);
+  EXPECT_NE(result.blind_reason.find("too few"), std::string::npos) << result.blind_reason;
+  const SampleFrames vlp = simulateUnorganized(pcl_movers::SensorModel::vlp16(), 1);
+  automatic.process(vlp.scans[0], vlp.poses[0], 0.1, 1, result);
+  EXPECT_FALSE(result.blind);
+  EXPECT_EQ(automatic.getSensorModel().name(), "vlp16");
 }
 
 TEST(MoverDetector, RejectsBadParameters) {

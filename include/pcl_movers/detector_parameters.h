@@ -22,9 +22,11 @@ namespace pcl_movers {
  */
 struct DetectorParameters {
   // ------------------------------------------------------------------ organizer
-  /// Sensor model preset used to organize unorganized scans: auto (estimate from the first scan),
-  /// hdl64, hdl32, vlp16, os1_64, ladar2d.
-  std::string sensor = "hdl64";
+  /// Beam layout used to organize unorganized scans: auto (estimated from the first scan with
+  /// enough returns; a known preset's calibration when its beams are recognized, see
+  /// SensorModel::recognize()), or a preset: hdl64, hdl32, vlp16, os1_64, ladar2d. Organized scans
+  /// keep their own rows and columns.
+  std::string sensor = "auto";
 
   // ------------------------------------------------------------------ ground removal
   /// Height of the sensor above the ground [m] (KITTI: 1.73); seeds the innermost ground planes.
@@ -311,7 +313,7 @@ struct DetectorParameters {
 // --------------------------------------------------------------------------- implementation
 template <typename F>
 void DetectorParameters::forEachParameter(F&& f) {
-  f("sensor", sensor, "sensor preset for organizing: auto, hdl64, hdl32, vlp16, os1_64, ladar2d");
+  f("sensor", sensor, "layout of unorganized scans: auto, hdl64, hdl32, vlp16, os1_64, ladar2d");
   f("sensor_height", sensor_height, "sensor height above the ground [m]");
   f("ground_distance", ground_distance, "max distance of ground points from their plane [m]");
   f("ground_max_slope_deg", ground_max_slope_deg, "max ground slope [deg]");

@@ -101,13 +101,19 @@ class MoverDetector {
   const DetectorParameters& getParameters() const { return parameters_; }
 
   /** \brief Sensor layout for organizing unorganized scans (default: parameters' `sensor`
-   * preset; "auto" estimates it from the first unorganized scan). */
+   * preset; "auto" estimates it from the first unorganized scan with enough returns and uses the
+   * preset it recognizes, if any: see SensorModel::recognize()). Organized scans keep their own
+   * rows and columns. */
   void setSensorModel(const SensorModel& model) {
     sensor_model_ = model;
     has_sensor_model_ = true;
     organizer_.object.reset();  // its lookups were built for the old model
   }
   const SensorModel& getSensorModel() const { return sensor_model_; }
+  /** \brief With sensor "auto": the layout estimated from the first usable unorganized scan
+   * (SensorModel::estimate()), of which getSensorModel() is the recognized preset, if any
+   * (SensorModel::recognize()); no rows before that scan or with another sensor. */
+  const SensorModel& getEstimatedSensorModel() const { return estimated_model_; }
 
   /** \brief Runs the pipeline on one scan (sensor frame) with its sensor→world pose.
    * World poses may be geo-referenced (UTM-sized translations): the detector works relative to
@@ -199,6 +205,7 @@ class MoverDetector {
   Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();  ///< see getOrigin()
   bool has_origin_ = false;
   SensorModel sensor_model_;
+  SensorModel estimated_model_;  ///< see getEstimatedSensorModel()
   bool has_sensor_model_ = false;
   MoverTracker<PointT> tracker_;
   FreeSpaceMap free_space_;             ///< recent scans for the tracker's free-space test

@@ -60,7 +60,8 @@ std::string MoverDetector<PointT>::blindReason(const PointCloudConstPtr& scan) {
     return "";
   // "auto": the beam layout is estimated from the first scan that has enough returns for it.
   try {
-    setSensorModel(SensorModel::estimate(*scan));
+    estimated_model_ = SensorModel::estimate(*scan);
+    setSensorModel(SensorModel::recognize(estimated_model_));
   } catch (const InputError& e) {
     const auto returns = std::count_if(scan->points.begin(), scan->points.end(), finite);
     if (returns >= kMinReturnsToEstimate) throw;  // returns enough, but no beam structure
