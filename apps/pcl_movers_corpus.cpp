@@ -289,9 +289,9 @@ int run(int argc, char** argv) {
   const auto modes = splitList(opt.modes);
   fs::create_directories(out / "scenes");
 
-  pcl::console::print_info("%zu scenes (%s split), %zu mode(s), %d in parallel → %s\n",
-                           scenes.size(), opt.split.c_str(), modes.size(), jobs,
-                           out.string().c_str());
+  // Messages go to stderr: stdout carries the report alone.
+  std::fprintf(stderr, "%zu scenes (%s split), %zu mode(s), %d in parallel → %s\n", scenes.size(),
+               opt.split.c_str(), modes.size(), jobs, out.string().c_str());
   const auto start = std::chrono::steady_clock::now();
   std::vector<std::vector<CorpusRun>> results(scenes.size());
   std::vector<std::string> errors(scenes.size());
@@ -348,7 +348,7 @@ int run(int argc, char** argv) {
   writeText(report, text);
   writeText(out / ("results-" + opt.split + ".jsonl"), pcl_movers::eval::formatCorpusJson(runs));
   std::cout << text << std::flush;
-  pcl::console::print_info("wrote %s\n", report.string().c_str());
+  std::fprintf(stderr, "wrote %s\n", report.string().c_str());
   return 0;
 }
 
