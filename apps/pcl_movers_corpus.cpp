@@ -64,7 +64,8 @@ void printHelp(const char* name) {
       "hdl64, hdl32, vlp16, os1_64 or ladar2d (k mod 5), so both splits hold every sensor.\n\n"
       "Writes into OUT (created; reused by later runs):\n"
       "  scenes/FAMILY-SEED/        the sequences with ground truth (simulated once; again when\n"
-      "                             the generator's scenario.yaml changes)\n"
+      "                             the scene's scenario or its sensor's layout changes; delete\n"
+      "                             them after changing the simulator itself)\n"
       "  runs/MODE/FAMILY-SEED/     pcl_movers_detect's output (replaced on every run)\n"
       "  report-SPLIT.md            the report: overall, by family, sensor, class, speed band,\n"
       "                             the worst targets and why they were missed\n"
@@ -161,14 +162,29 @@ std::string readFile(const fs::path& path) {
   return text.str();
 }
 
-/** Simulates the scene unless OUT/scenes holds it with the same scenario file. Returns the
- * seconds spent simulating (0 when reused). */
+/** What a cached scene was made from: its scenario file and the beam layout of its sensor (a
+ * changed preset makes the scene stale although its scenario file is the same). */
+std::string sceneStamp(const pcl_movers::sim::Scenario& scenario) {
+  const pcl_movers::SensorModel sensor = pcl_movers::SensorModel::fromName(scenario.sensor.preset);
+  std::ostringstream stamp;
+  stamp << pcl_movers::sim::toYaml(scenario) << "# sensor layout: " << sensor.rows() << " x "
+        << sensor.columns() << ", elevations";
+  stamp.precision(9);
+  for (float e : sensor.elevations()) stamp << " " << e;
+  stamp << "\n";
+  return stamp.str();
+}
+
+/** Simulates the scene unless OUT/scenes holds it with the same stamp. Returns the seconds spent
+ * simulating (0 when reused). */
 double ensureScene(const pcl_movers::sim::Scenario& scenario, const fs::path& folder) {
-  const std::string yaml = pcl_movers::sim::toYaml(scenario);
-  if (fs::exists(folder / "objects.txt") && readFile(folder / "scenario.yaml") == yaml) return 0;
+  const std::string stamp = sceneStamp(scenario);
+  const fs::path stamp_file = folder / "corpus_stamp.txt";
+  if (fs::exists(folder / "objects.txt") && readFile(stamp_file) == stamp) return 0;
   const auto start = std::chrono::steady_clock::now();
   pcl_movers::sim::LidarSimulator simulator(scenario);
   pcl_movers::sim::writeSequence(simulator, folder.string(), true);
+  std::ofstream(stamp_file) << stamp;  // last: a scene without it is simulated again
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
