@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The scene corpus (pcl_movers_corpus): every family and sensor, seeds 1-12 per family, odd seeds
 # the tune split, even seeds the check split; the check split's report first. Scenes are cached
-# in BUILD_DIR/corpus (about 8 GB) and simulated again only when the generator changes them.
+# in BUILD_DIR/corpus (about 13 GB) and simulated again only when the generator changes them.
 # Prints one Markdown section. Usage: bash scripts/eval_corpus.sh BUILD_DIR
 set -euo pipefail
 BUILD_DIR=$(cd "${1:?usage: eval_corpus.sh BUILD_DIR}" && pwd)
