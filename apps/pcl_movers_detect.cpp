@@ -2,6 +2,7 @@
  * pcl_movers_detect SEQ OUT — the mover-detection pipeline on a sequence folder.
  * SPDX-License-Identifier: BSD-3-Clause
  */
+#include <pcl_movers/deskew.h>
 #include <pcl_movers/detector_parameters.h>
 #include <pcl_movers/ego_motion_estimator.h>
 #include <pcl_movers/io/sequence.h>
@@ -296,6 +297,7 @@ struct RunState {
   std::map<std::string, std::vector<double>> stage_ms;
   std::set<int> track_ids, mover_ids;
   std::size_t rows = 0;
+  std::string deskew = "{}";  ///< ScanDeskewer::toJson()
 };
 
 std::string timingsJson(const RunState& st, bool estimate) {
@@ -333,7 +335,7 @@ void writeSummary(const Options& o, std::size_t frames, const RunState& st,
   js << ",\n  \"run_key\": \"" << st.run_key << "\",\n  \"pose_source\": \"" << st.pose_source
      << "\",\n  \"sensor\": " << jsonString(st.sensor)
      << ",\n  \"blind_frames\": " << jsonList(st.blind)
-     << ",\n  \"blind_frame_count\": " << st.blind.size()
+     << ",\n  \"blind_frame_count\": " << st.blind.size() << ",\n  \"deskew\": " << st.deskew
      << ",\n  \"bad_frames\": " << jsonList(st.bad) << ",\n  \"bad_frame_count\": " << st.bad.size()
      << ",\n  \"rows\": " << st.rows << ",\n  \"tracks\": " << st.track_ids.size()
      << ",\n  \"movers\": " << st.mover_ids.size() << ",\n  \"timings_ms\": {"
@@ -454,6 +456,7 @@ class DetectRun {
   const bool estimate_;
   Detector detector_;
   pcl_movers::EgoMotionEstimator<PointT> ego_;
+  pcl_movers::ScanDeskewer deskew_{o_.params.deskew};
   RunState st_;
   PreviousRun prev_;
   std::size_t prev_cursor_ = 0;  ///< next line of prev_ a replayed row must equal
@@ -578,6 +581,11 @@ void DetectRun::processFrame(std::size_t i) {
     ego_ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   }
+  const std::size_t j = i > 0 ? i - 1 : i + 1;  // previous pose; the next one at the first frame
+  pcl_movers::StampedPose other;
+  if (!estimate_ && j < reader_.size()) other = {reader_.pose(j), reader_.time(j), true};
+  if (readable) deskew_.apply(reader_.framePaths()[i], *scan, {pose, reader_.time(i), true}, other);
+  st_.deskew = deskew_.toJson();
   Detector::FrameResult result;
   try {
     detector_.process(scan, pose, reader_.time(i), static_cast<int>(i), result);

@@ -27,6 +27,11 @@ struct DetectorParameters {
   /// SensorModel::recognize()), or a preset: hdl64, hdl32, vlp16, os1_64, ladar2d. Organized scans
   /// keep their own rows and columns.
   std::string sensor = "auto";
+  /// De-skewing of scans whose PCD carries per-point times (`time`, `t`, `timestamp`): each point
+  /// moved into the sensor frame at the frame time by the ego motion interpolated between this
+  /// frame's pose and the previous one's (ScanDeskewer). auto = when the frames carry times and
+  /// the poses are known, on = required (an error otherwise), off = never.
+  std::string deskew = "auto";
 
   // ------------------------------------------------------------------ ground removal
   /// Height of the sensor above the ground [m] (KITTI: 1.73); seeds the innermost ground planes.
@@ -314,6 +319,7 @@ struct DetectorParameters {
 template <typename F>
 void DetectorParameters::forEachParameter(F&& f) {
   f("sensor", sensor, "layout of unorganized scans: auto, hdl64, hdl32, vlp16, os1_64, ladar2d");
+  f("deskew", deskew, "per-point-time de-skewing with the ego motion: auto, on, off");
   f("sensor_height", sensor_height, "sensor height above the ground [m]");
   f("ground_distance", ground_distance, "max distance of ground points from their plane [m]");
   f("ground_max_slope_deg", ground_max_slope_deg, "max ground slope [deg]");
@@ -502,6 +508,8 @@ inline void DetectorParameters::validate() const {
     if (!(v > 0)) throw InputError(std::string("parameter ") + key + " must be > 0");
   };
   positive("sensor_height", sensor_height);
+  if (deskew != "auto" && deskew != "on" && deskew != "off")
+    throw InputError("parameter deskew must be auto, on or off (not '" + deskew + "')");
   positive("ground_distance", ground_distance);
   positive("depth_ratio", depth_ratio);
   if (!(row_bridge >= 0)) throw InputError("parameter row_bridge must be >= 0");

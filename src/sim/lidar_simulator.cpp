@@ -6,6 +6,9 @@
 #include <pcl_movers/sim/lidar_simulator.h>
 #include <pcl_movers/sim/scene_families.h>
 
+#include <pcl/io/pcd_io.h>
+#include <pcl/point_types.h>
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -13,6 +16,24 @@
 #include <iomanip>
 #include <limits>
 #include <sstream>
+
+namespace pcl_movers {
+namespace sim {
+/** \brief A point with a per-point time [s after the frame time], Velodyne-driver style. */
+struct EIGEN_ALIGN16 PointXYZIT {
+  PCL_ADD_POINT4D;
+  float intensity;
+  float time;
+  PCL_MAKE_ALIGNED_OPERATOR_NEW
+};
+}  // namespace sim
+}  // namespace pcl_movers
+
+// clang-format off
+POINT_CLOUD_REGISTER_POINT_STRUCT(pcl_movers::sim::PointXYZIT,
+                                  (float, x, x)(float, y, y)(float, z, z)
+                                  (float, intensity, intensity)(float, time, time))
+// clang-format on
 
 namespace pcl_movers {
 namespace sim {
@@ -424,8 +445,30 @@ struct FrameObject {
   std::vector<Primitive> prims;  // legs moved to this frame's swing
   double near = 0;               // distance to the bounding sphere [m]
   float elev_min = 0, elev_max = 0;
+  Eigen::Vector3d center_s = Eigen::Vector3d::Zero();  // bounding sphere centre, sensor frame
+  double radius = 0;                                   // bounding sphere radius [m]
   int n_points = 0;
 };
+
+/** Indices of the objects of `fobs` whose bounding sphere covers azimuth `az` of the sensor they
+ * were placed for (all of it when the sensor is inside it), nearest first. */
+std::vector<int> columnCandidates(const std::vector<FrameObject>& fobs, double az) {
+  std::vector<int> cand;
+  for (std::size_t i = 0; i < fobs.size(); ++i) {
+    const FrameObject& fo = fobs[i];
+    if (!std::isfinite(fo.near)) continue;
+    const double horiz = std::hypot(fo.center_s.x(), fo.center_s.y());
+    if (horiz > fo.radius) {
+      const double diff =
+          std::remainder(az - std::atan2(fo.center_s.y(), fo.center_s.x()), 2 * M_PI);
+      if (std::abs(diff) > std::asin(fo.radius / horiz)) continue;
+    }
+    cand.push_back(int(i));
+  }
+  std::stable_sort(cand.begin(), cand.end(),
+                   [&](int a, int b) { return fobs[a].near < fobs[b].near; });
+  return cand;
+}
 
 }  // namespace
 
@@ -480,6 +523,56 @@ struct LidarSimulator::Scene {
                             0.25 * k2 * sa * std::cos(k2 * (x * ca + y * sa) + p3));
     }
     return g;
+  }
+
+  /** Objects (in `objects` order) at time t, seen from the sensor at T_ws (scenario world); those
+   * whose bounding sphere lies beyond max_range have near = +inf and no ray data. */
+  std::vector<FrameObject> frameObjects(double t, const Eigen::Isometry3d& T_ws,
+                                        double max_range) const {
+    const Eigen::Matrix3d R = T_ws.linear();
+    const Eigen::Vector3d O = T_ws.translation();
+    const Eigen::Isometry3d T_sw = T_ws.inverse();
+    std::vector<FrameObject> fobs;
+    fobs.reserve(objects.size());
+    for (const Object& obj : objects) {
+      FrameObject fo;
+      fo.obj = &obj;
+      const Trajectory::State st = obj.trajectory.at(t);
+      fo.yaw = st.heading;
+      fo.speed = obj.mover ? st.speed : 0.0;
+      fo.position = {st.position.x(), st.position.y(), terrain(st.position.x(), st.position.y())};
+      const double c = std::cos(fo.yaw), s = std::sin(fo.yaw);
+      Eigen::Matrix3d Rz;
+      Rz << c, -s, 0, s, c, 0, 0, 0, 1;
+      const Eigen::Vector3d box_center = 0.5 * (obj.box_min + obj.box_max);
+      const double radius = 0.5 * (obj.box_max - obj.box_min).norm();
+      const Eigen::Vector3d center_s = T_sw * (fo.position + Rz * box_center);
+      const double dist = center_s.norm();
+      fo.near = dist - radius;
+      fo.center_s = center_s;
+      fo.radius = radius;
+      if (fo.near > max_range) {
+        fobs.push_back(fo);  // kept for objects.txt bookkeeping only if within range (below)
+        fobs.back().near = std::numeric_limits<double>::infinity();
+        continue;
+      }
+      fo.origin_local = Rz.transpose() * (O - fo.position);
+      fo.sensor_to_local = Rz.transpose() * R;
+      fo.prims = obj.prims;
+      if (obj.stride > 0 && fo.speed > 0.05) {
+        // Legs swing at a cadence that grows with speed (about 1.8 steps/s at walking pace).
+        const double phase = 2 * M_PI * 0.9 * std::min(2.0, std::max(0.5, fo.speed / 1.4)) * t;
+        for (Primitive& p : fo.prims)
+          if (p.leg) p.center.x() += p.leg * obj.stride * std::sin(phase + obj.track_id);
+      }
+      const double horiz = std::hypot(center_s.x(), center_s.y());
+      const double el = std::atan2(center_s.z(), horiz);
+      const double half = dist > radius ? std::asin(radius / dist) : M_PI;
+      fo.elev_min = float(el - half);
+      fo.elev_max = float(el + half);
+      fobs.push_back(std::move(fo));
+    }
+    return fobs;
   }
 
   /** Sensor→world pose in the scenario's world at time t. */
@@ -724,6 +817,11 @@ double LidarSimulator::terrainHeight(double x, double y) const {
   return scene_->terrain(x, y);
 }
 
+double LidarSimulator::columnTime(int column) const {
+  if (scenario_.sensor.sweep != "rolling") return 0.0;
+  return double(column) / (double(sensor_.columns()) * scenario_.rate_hz);
+}
+
 Eigen::Isometry3d LidarSimulator::pose(int frame) const {
   return scene_->world_from_first.inverse() * scene_->egoPose(time(frame), scenario_.sensor.height);
 }
@@ -740,95 +838,14 @@ void LidarSimulator::simulate(int frame, pcl::PointCloud<pcl::PointXYZI>& cloud,
   const SensorSpec& spec = scenario_.sensor;
   const double t = time(frame);
   const Eigen::Isometry3d T_ws = S.egoPose(t, spec.height);  // sensor → scenario world
-  const Eigen::Matrix3d R = T_ws.linear();
-  const Eigen::Vector3d O = T_ws.translation();
   const Eigen::Isometry3d T_sw = T_ws.inverse();
   pose_out = S.world_from_first.inverse() * T_ws;
 
   const int rows = sensor_.rows(), cols = sensor_.columns();
   const double max_range = spec.max_range;
 
-  // ---- objects in this frame, nearest first
-  std::vector<FrameObject> fobs;
-  fobs.reserve(S.objects.size());
-  for (const Object& obj : S.objects) {
-    FrameObject fo;
-    fo.obj = &obj;
-    const Trajectory::State st = obj.trajectory.at(t);
-    fo.yaw = st.heading;
-    fo.speed = obj.mover ? st.speed : 0.0;
-    fo.position = {st.position.x(), st.position.y(), S.terrain(st.position.x(), st.position.y())};
-    const double c = std::cos(fo.yaw), s = std::sin(fo.yaw);
-    Eigen::Matrix3d Rz;
-    Rz << c, -s, 0, s, c, 0, 0, 0, 1;
-    const Eigen::Vector3d box_center = 0.5 * (obj.box_min + obj.box_max);
-    const double radius = 0.5 * (obj.box_max - obj.box_min).norm();
-    const Eigen::Vector3d center_s = T_sw * (fo.position + Rz * box_center);
-    const double dist = center_s.norm();
-    fo.near = dist - radius;
-    if (fo.near > max_range) {
-      fobs.push_back(fo);  // kept for objects.txt bookkeeping only if within range (below)
-      fobs.back().near = std::numeric_limits<double>::infinity();
-      continue;
-    }
-    fo.origin_local = Rz.transpose() * (O - fo.position);
-    fo.sensor_to_local = Rz.transpose() * R;
-    fo.prims = obj.prims;
-    if (obj.stride > 0 && fo.speed > 0.05) {
-      // Legs swing at a cadence that grows with speed (about 1.8 steps/s at walking pace).
-      const double phase = 2 * M_PI * 0.9 * std::min(2.0, std::max(0.5, fo.speed / 1.4)) * t;
-      for (Primitive& p : fo.prims)
-        if (p.leg) p.center.x() += p.leg * obj.stride * std::sin(phase + obj.track_id);
-    }
-    const double horiz = std::hypot(center_s.x(), center_s.y());
-    const double el = std::atan2(center_s.z(), horiz);
-    const double half = dist > radius ? std::asin(radius / dist) : M_PI;
-    fo.elev_min = float(el - half);
-    fo.elev_max = float(el + half);
-    fobs.push_back(std::move(fo));
-  }
-  std::vector<int> order(fobs.size());
-  for (std::size_t i = 0; i < order.size(); ++i) order[i] = int(i);
-  std::stable_sort(order.begin(), order.end(),
-                   [&](int a, int b) { return fobs[a].near < fobs[b].near; });
-
-  // ---- per-column candidate lists (azimuth interval of each bounding sphere is exact)
-  std::vector<std::vector<int>> column_objects(cols);
-  const double res = sensor_.azimuthResolution();
-  const bool full = sensor_.isFullRevolution();
-  for (int idx : order) {
-    const FrameObject& fo = fobs[idx];
-    if (!std::isfinite(fo.near)) continue;
-    const Object& obj = *fo.obj;
-    const Eigen::Vector3d box_center = 0.5 * (obj.box_min + obj.box_max);
-    const double radius = 0.5 * (obj.box_max - obj.box_min).norm();
-    const double c = std::cos(fo.yaw), s = std::sin(fo.yaw);
-    const Eigen::Vector3d center_w =
-        fo.position + Eigen::Vector3d(c * box_center.x() - s * box_center.y(),
-                                      s * box_center.x() + c * box_center.y(), box_center.z());
-    const Eigen::Vector3d cs = T_sw * center_w;
-    const double horiz = std::hypot(cs.x(), cs.y());
-    if (horiz <= radius) {
-      for (int col = 0; col < cols; ++col) column_objects[col].push_back(idx);
-      continue;
-    }
-    const double az = std::atan2(cs.y(), cs.x()), half = std::asin(radius / horiz);
-    // Column c looks at azimuthMax - (c + 0.5) res.
-    const double c_lo = (sensor_.azimuthMax() - (az + half)) / res - 0.5;
-    const double c_hi = (sensor_.azimuthMax() - (az - half)) / res - 0.5;
-    long lo = long(std::ceil(c_lo)), hi = long(std::floor(c_hi));
-    if (!full) {
-      lo = std::max(lo, 0L);
-      hi = std::min(hi, long(cols) - 1);
-    } else if (hi - lo >= cols) {
-      lo = 0;
-      hi = cols - 1;
-    }
-    for (long k = lo; k <= hi; ++k) {
-      const long col = full ? ((k % cols) + cols) % cols : k;
-      column_objects[col].push_back(idx);
-    }
-  }
+  // ---- objects in this frame (ground truth; the rays of an instant sweep)
+  std::vector<FrameObject> fobs = S.frameObjects(t, T_ws, max_range);
 
   // ---- cast
   cloud.width = std::uint32_t(cols);
@@ -850,10 +867,13 @@ void LidarSimulator::simulate(int frame, pcl::PointCloud<pcl::PointXYZI>& cloud,
       std::binary_search(scenario_.blind_frames.begin(), scenario_.blind_frames.end(), frame);
   if (blind)
     for (pcl::PointXYZI& pt : cloud.points) pt.x = pt.y = pt.z = nan;
-  for (int col = 0; col < (blind ? 0 : cols); ++col) {
+  // One column of rays from the sensor at T_col against the objects `fl` placed for it.
+  auto cast = [&](int col, std::vector<FrameObject>& fl, const std::vector<int>& cand,
+                  const Eigen::Isometry3d& T_col) {
+    const Eigen::Matrix3d R = T_col.linear();
+    const Eigen::Vector3d O = T_col.translation();
     const double az = sensor_.azimuthOf(col);
     const double ca = std::cos(az), sa = std::sin(az);
-    const std::vector<int>& cand = column_objects[col];
     for (int row = 0; row < rows; ++row) {
       const Eigen::Vector3d d_s(cos_el[row] * ca, cos_el[row] * sa, sin_el[row]);
       const float elev = sensor_.elevations()[row];
@@ -864,7 +884,7 @@ void LidarSimulator::simulate(int frame, pcl::PointCloud<pcl::PointXYZI>& cloud,
       float best_refl = 0;
       double best_cos = 1;
       for (int idx : cand) {
-        const FrameObject& fo = fobs[idx];
+        const FrameObject& fo = fl[idx];
         if (fo.near >= best) break;  // sorted: nothing further can be nearer
         if (elev < fo.elev_min || elev > fo.elev_max) continue;
         const Eigen::Vector3d d = fo.sensor_to_local * d_s;
@@ -926,12 +946,66 @@ void LidarSimulator::simulate(int frame, pcl::PointCloud<pcl::PointXYZI>& cloud,
       if (ground) {
         labels[k] = io::makeLabel(best_cls, 0);
       } else {
-        FrameObject& fo = fobs[best_obj];
+        FrameObject& fo = fl[best_obj];
         const std::uint16_t cls = fo.obj->moving ? movingClass(best_cls, fo.obj->type) : best_cls;
         labels[k] = io::makeLabel(cls, std::uint16_t(fo.obj->track_id));
         ++fo.n_points;
       }
     }
+  };
+  if (!blind && spec.sweep == "rolling") {
+    // Each column at its own time: the ego pose and every object are evaluated then.
+    for (int col = 0; col < cols; ++col) {
+      const double tc = t + columnTime(col);
+      const Eigen::Isometry3d T_col = S.egoPose(tc, spec.height);
+      std::vector<FrameObject> fl = S.frameObjects(tc, T_col, max_range);
+      cast(col, fl, columnCandidates(fl, sensor_.azimuthOf(col)), T_col);
+      for (std::size_t i = 0; i < fl.size(); ++i) fobs[i].n_points += fl[i].n_points;
+    }
+  } else if (!blind) {
+    std::vector<int> order(fobs.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = int(i);
+    std::stable_sort(order.begin(), order.end(),
+                     [&](int a, int b) { return fobs[a].near < fobs[b].near; });
+    // ---- per-column candidate lists (azimuth interval of each bounding sphere is exact)
+    std::vector<std::vector<int>> column_objects(cols);
+    const double res = sensor_.azimuthResolution();
+    const bool full = sensor_.isFullRevolution();
+    for (int idx : order) {
+      const FrameObject& fo = fobs[idx];
+      if (!std::isfinite(fo.near)) continue;
+      const Object& obj = *fo.obj;
+      const Eigen::Vector3d box_center = 0.5 * (obj.box_min + obj.box_max);
+      const double radius = 0.5 * (obj.box_max - obj.box_min).norm();
+      const double c = std::cos(fo.yaw), s = std::sin(fo.yaw);
+      const Eigen::Vector3d center_w =
+          fo.position + Eigen::Vector3d(c * box_center.x() - s * box_center.y(),
+                                        s * box_center.x() + c * box_center.y(), box_center.z());
+      const Eigen::Vector3d cs = T_sw * center_w;
+      const double horiz = std::hypot(cs.x(), cs.y());
+      if (horiz <= radius) {
+        for (int col = 0; col < cols; ++col) column_objects[col].push_back(idx);
+        continue;
+      }
+      const double az = std::atan2(cs.y(), cs.x()), half = std::asin(radius / horiz);
+      // Column c looks at azimuthMax - (c + 0.5) res.
+      const double c_lo = (sensor_.azimuthMax() - (az + half)) / res - 0.5;
+      const double c_hi = (sensor_.azimuthMax() - (az - half)) / res - 0.5;
+      long lo = long(std::ceil(c_lo)), hi = long(std::floor(c_hi));
+      if (!full) {
+        lo = std::max(lo, 0L);
+        hi = std::min(hi, long(cols) - 1);
+      } else if (hi - lo >= cols) {
+        lo = 0;
+        hi = cols - 1;
+      }
+      for (long k = lo; k <= hi; ++k) {
+        const long col = full ? ((k % cols) + cols) % cols : k;
+        column_objects[col].push_back(idx);
+      }
+    }
+
+    for (int col = 0; col < cols; ++col) cast(col, fobs, column_objects[col], T_ws);
   }
 
   // ---- ground truth rows, sensor frame
@@ -966,6 +1040,36 @@ void LidarSimulator::simulate(int frame, pcl::PointCloud<pcl::PointXYZI>& cloud,
 
 // ------------------------------------------------------------------ writing a sequence
 
+namespace {
+
+/** Rewrites the frame at `path` with a per-point `time` field (seconds after the frame time, the
+ * time of the point's column), as the Velodyne driver writes it. */
+void writeTimedFrame(const std::string& path, const pcl::PointCloud<pcl::PointXYZI>& cloud,
+                     const LidarSimulator& sim) {
+  pcl::PointCloud<PointXYZIT> out;
+  out.width = cloud.width;
+  out.height = cloud.height;
+  out.is_dense = cloud.is_dense;
+  out.points.resize(cloud.size());
+  for (std::size_t k = 0; k < cloud.size(); ++k) {
+    PointXYZIT& p = out.points[k];
+    p.x = cloud.points[k].x;
+    p.y = cloud.points[k].y;
+    p.z = cloud.points[k].z;
+    p.intensity = cloud.points[k].intensity;
+    p.time = float(sim.columnTime(int(k % cloud.width)));
+  }
+  const std::string tmp = path + ".tmp";
+  if (pcl::io::savePCDFileBinary(tmp, out) < 0) {
+    std::error_code ec;
+    fs::remove(tmp, ec);
+    throw InputError(path, 0, "cannot write PCD with point times");
+  }
+  fs::rename(tmp, path);
+}
+
+}  // namespace
+
 void writeSequence(const LidarSimulator& sim, const std::string& folder, bool overwrite,
                    const std::function<void(std::size_t, std::size_t)>& progress) {
   std::error_code ec;
@@ -990,7 +1094,8 @@ void writeSequence(const LidarSimulator& sim, const std::string& folder, bool ov
     for (int f = 0; f < n; ++f) {
       Eigen::Isometry3d pose;
       sim.simulate(f, cloud, labels, objects, pose);
-      writer.writeFrame(std::size_t(f), cloud);
+      const std::string frame_path = writer.writeFrame(std::size_t(f), cloud);
+      if (sim.getScenario().sensor.sweep == "rolling") writeTimedFrame(frame_path, cloud, sim);
       std::ostringstream name;
       name << std::setw(6) << std::setfill('0') << f << ".label";
       io::writeLabels((tmp / "labels" / name.str()).string(), labels);

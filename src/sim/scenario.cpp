@@ -322,6 +322,11 @@ Scenario parseScenario(const std::string& text, const std::string& file) {
       throw InputError(file, f.get("dropout")->line, "'sensor.dropout': must be below 1");
     if (sc.sensor.min_range >= sc.sensor.max_range)
       throw InputError(file, n->line, "'sensor': min_range must be below max_range");
+    sc.sensor.sweep = f.text("sweep", sc.sensor.sweep);
+    if (sc.sensor.sweep != "instant" && sc.sensor.sweep != "rolling")
+      throw InputError(
+          file, f.get("sweep")->line,
+          "'sensor.sweep': unknown sweep '" + sc.sensor.sweep + "' (instant, rolling)");
     f.finish();
   }
 

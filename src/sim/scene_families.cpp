@@ -746,6 +746,7 @@ std::string toYaml(const Scenario& sc) {
       << "\n  min_range: " << num(sc.sensor.min_range)
       << "\n  range_noise: " << num(sc.sensor.range_noise)
       << "\n  dropout: " << num(sc.sensor.dropout) << "\n";
+  if (sc.sensor.sweep != "instant") out << "  sweep: " << sc.sensor.sweep << "\n";
   if (!sc.blind_frames.empty()) {
     out << "blind_frames: [";
     for (std::size_t i = 0; i < sc.blind_frames.size(); ++i)

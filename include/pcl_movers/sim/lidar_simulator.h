@@ -23,7 +23,9 @@ namespace sim {
 /** \brief Ray-casts a Scenario into organized scans with point-wise and object ground truth.
  *
  * Every beam (row) and azimuth step (column) of the SensorModel is one ray from the sensor on the
- * moving ego vehicle; the scan is taken at one instant per frame (no rolling-shutter skew). The
+ * moving ego vehicle. With `sensor.sweep: instant` (the default) the scan is taken at one instant
+ * per frame; with `rolling` each column is taken at its own time (columnTime()), the ego pose and
+ * every object evaluated then, as a spinning sensor on a moving vehicle sees the world. The
  * ego vehicle follows its planar trajectory on the terrain and is pitched/rolled by the terrain
  * slope. Objects are unions of analytic primitives (boxes, vertical cylinders, ellipsoids; foliage
  * as porous ellipsoids with an exponential free path), so coarse angular sampling changes their
@@ -59,6 +61,11 @@ class LidarSimulator {
 
   /** \brief Time of frame i [s] (i / rate). */
   double time(int frame) const { return double(frame) / scenario_.rate_hz; }
+  /** \brief Time of column `column` relative to its frame's time [s]: 0 for an instant sweep; for
+   * a rolling sweep column / (columns · rate). Columns run clockwise seen from above (azimuth
+   * decreasing, as a Velodyne turns), column 0 starting behind the sensor for a 360° sensor, so
+   * the frame time is the start of the sweep and the seam is behind the vehicle. */
+  double columnTime(int column) const;
   /** \brief Sensor→world pose of frame i, world = the sensor frame of frame 0 (as in KITTI). */
   Eigen::Isometry3d pose(int frame) const;
   /** \brief Sensor→world pose of frame i in the scenario file's world (terrain, objects). */
@@ -88,7 +95,9 @@ class LidarSimulator {
 
 /** \brief Writes a whole sequence folder as DESIGN.md defines it: `frames/NNNNNN.pcd`,
  * `labels/NNNNNN.label`, `poses.txt`, `times.txt`, `objects.txt`, plus `scenario.yaml` (a copy
- * of the input when it came from a file).
+ * of the input when it came from a file). A rolling sweep's frames carry a per-point float
+ * `time` field (seconds after the frame time, LidarSimulator::columnTime()), as the Velodyne
+ * driver writes it.
  *
  * The sequence is written into a temporary sibling folder and moved into place at the end, so an
  * error leaves nothing half-written. An existing non-empty `folder` is refused (InputError) unless

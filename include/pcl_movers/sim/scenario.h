@@ -66,6 +66,10 @@ struct SensorSpec {
   double min_range = 1.0;        ///< returns closer are NaN [m]
   double range_noise = 0.02;     ///< Gaussian range noise sigma [m]
   double dropout = 0.0;          ///< probability that a return is lost, [0, 1)
+  /** \brief "instant": the whole scan at the frame time; "rolling": each azimuth column at its
+   * own time within the frame period, as a spinning sensor takes it (LidarSimulator::columnTime).
+   */
+  std::string sweep = "instant";
 };
 
 /** \brief Ground surface (`terrain:` block). Height h(x, y) = height + slope·(x, y) plus, for
