@@ -254,7 +254,8 @@ TEST(PointTimes, OusterNanosecondsAndAbsoluteTimestamps) {
   fs::remove_all(dir);
 }
 
-// pcl_movers_detect de-skews a rolling sweep's frames by default and says so in summary.json.
+// pcl_movers_detect de-skews a rolling sweep's frames with --deskew auto and says so in
+// summary.json.
 TEST(DeskewTool, DetectReportsDeskewedFrames) {
   const std::string dir = tempDir("deskew_tool");
   Scenario sc = staticScene("rolling", 10.0, 0.0);
