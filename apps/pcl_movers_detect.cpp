@@ -50,7 +50,8 @@ const std::vector<std::string> kFlags{"-h",
                                       "--resume"};
 
 std::vector<std::string> optionsWithValue() {
-  std::vector<std::string> with_value{"--config", "--rate", "--stop-after-frames"};
+  std::vector<std::string> with_value{"--config", "--rate",  "--stop-after-frames",
+                                      "--poses",  "--calib", "--poses-format"};
   for (const auto& key : DetectorParameters().keys()) with_value.push_back("--" + key);
   return with_value;
 }
@@ -59,22 +60,33 @@ void printHelp(const char* name) {
   const DetectorParameters defaults;
   std::ostringstream os;
   os << "Usage: " << name << " SEQ OUT [options]\n\n"
-     << "Detects movers (moving vehicles and people) in the LiDAR sequence folder SEQ "
-        "(frames/*.pcd,\n"
-     << "*.pcd or velodyne/*.bin; poses.txt or PCD VIEWPOINTs; times.txt) and writes to OUT:\n"
+     << "Detects movers (moving vehicles and people) in the LiDAR sequence folder SEQ (scans\n"
+     << ".pcd, .bin (KITTI) or .ply, one format, in SEQ itself, SEQ/frames/ or SEQ/velodyne/;\n"
+     << "poses.txt, --poses or PCD VIEWPOINTs; times.txt) and writes to OUT:\n"
      << "  tracks.csv     one row per tracked object per frame (see DESIGN.md), written and\n"
-     << "                 flushed frame by frame\n"
+     << "                 flushed frame by frame; `frame` is the 0-based index, `file` the\n"
+     << "                 number in the input file's name (000040.bin -> 40)\n"
+     << "  tracks.json    per frame: index, file number, time, track ids and the movers (box,\n"
+     << "                 velocity, similarity)\n"
      << "  summary.json   state (running/interrupted/finished, last complete frame), blind and\n"
      << "                 bad frames, per-stage timings, counts and the parameters used\n"
-     << "  labelled/      with --labelled-clouds: NNNNNN.pcd, fields x y z label track\n"
-     << "                 (label 0 unlabelled, 1 ground, 2 static, 3 mover; track id or -1)\n\n"
+     << "  labelled/      with --labelled-clouds: one PCD per frame named as its input file,\n"
+     << "                 the input's points in its order with its fields, plus label (0\n"
+     << "                 unlabelled or not kept, 1 ground, 2 static, 3 mover) and track (or "
+        "-1)\n\n"
      << "Options:\n"
      << "  --config FILE      'key = value' lines with any of the parameters below\n"
      << "  --rate HZ          frame rate when SEQ has no times.txt (default 10)\n"
+     << "  --poses FILE       sensor poses from FILE instead of SEQ/poses.txt\n"
+     << "  --poses-format F   kitti (3x4 rows, one per frame; default), tum (timestamp x y z qx\n"
+     << "                     qy qz qw, matched to the frame times and interpolated when the\n"
+     << "                     counts differ) or kitti-camera (KITTI odometry camera poses)\n"
+     << "  --calib FILE       KITTI calib.txt for kitti-camera: pose = Tr^-1 * P_cam * Tr\n"
      << "  --estimate-poses   estimate the sensor poses from the scans even when SEQ has poses\n"
-     << "                     (always done when it has none)\n"
-     << "  --labelled-clouds  also write OUT/labelled/NNNNNN.pcd\n"
-     << "  --overwrite        write into a non-empty OUT\n"
+     << "                     (always done when it has none; SEQ/poses.txt is then not read)\n"
+     << "  --labelled-clouds  also write OUT/labelled/<input name>.pcd\n"
+     << "  --overwrite        write into a non-empty OUT; removes what an earlier run wrote\n"
+     << "                     there (tracks.csv, tracks.json, summary.json, labelled/*.pcd)\n"
      << "  --skip-bad-frames  a malformed frame (truncated, not a PCD, ...) is warned about,\n"
      << "                     counted in summary.json and treated as blind instead of an error\n"
      << "  --resume           continue the interrupted run in OUT after its last complete frame\n"
@@ -109,46 +121,76 @@ double median(std::vector<double> v) {
   return m;
 }
 
-/** Labelled cloud: finite points of the organized scan with their class and track id. */
-void writeLabelledCloud(const std::string& path, const Detector::FrameResult& result) {
-  const auto& cloud = *result.organized;
-  pcl::PCLPointCloud2 out;
-  const char* names[5] = {"x", "y", "z", "label", "track"};
-  const std::uint8_t types[5] = {pcl::PCLPointField::FLOAT32, pcl::PCLPointField::FLOAT32,
-                                 pcl::PCLPointField::FLOAT32, pcl::PCLPointField::UINT32,
-                                 pcl::PCLPointField::INT32};
-  for (int f = 0; f < 5; ++f) {
+/** The input scan's fields (without any own `label`/`track`, replaced here) plus `label`
+ * (uint32) and `track` (int32), in the input's layout. */
+void addLabelFields(const pcl::PCLPointCloud2& in, pcl::PCLPointCloud2& out) {
+  out.fields.clear();
+  for (const auto& f : in.fields)
+    if (f.name != "label" && f.name != "track") out.fields.push_back(f);
+  const char* names[2] = {"label", "track"};
+  const std::uint8_t types[2] = {pcl::PCLPointField::UINT32, pcl::PCLPointField::INT32};
+  for (int k = 0; k < 2; ++k) {
     pcl::PCLPointField field;
-    field.name = names[f];
-    field.offset = 4 * f;
-    field.datatype = types[f];
+    field.name = names[k];
+    field.offset = in.point_step + 4 * k;  // after the input's bytes, copied as they are
+    field.datatype = types[k];
     field.count = 1;
     out.fields.push_back(field);
   }
-  out.point_step = 20;
-  out.height = 1;
-  out.is_dense = true;
-  std::size_t count = 0;
-  for (const auto& p : cloud.points)
-    count += std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
-  out.data.resize(count * out.point_step);
-  std::size_t k = 0;
-  for (std::size_t i = 0; i < cloud.size(); ++i) {
-    const auto& p = cloud[i];
-    if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))) continue;
-    std::uint8_t* d = &out.data[k * out.point_step];
-    const float xyz[3] = {p.x, p.y, p.z};
-    const std::uint32_t label = result.labels[i];
-    const std::int32_t track = result.track_ids[i];
-    std::memcpy(d, xyz, 12);
-    std::memcpy(d + 12, &label, 4);
-    std::memcpy(d + 16, &track, 4);
-    ++k;
-  }
-  out.width = static_cast<std::uint32_t>(count);
+  out.point_step = in.point_step + 8;
+  out.width = in.width;
+  out.height = in.height;
   out.row_step = out.point_step * out.width;
+  out.is_dense = in.is_dense;
+  out.is_bigendian = in.is_bigendian;
+}
+
+/** A binary PCD; one without points is its header alone (PCL's writer warns about those). */
+void writeLabelledBlob(const std::string& path, const pcl::PCLPointCloud2& blob) {
   pcl::PCDWriter writer;
-  if (writer.writeBinary(path, out) != 0) throw InputError(path, 0, "cannot write labelled cloud");
+  if (blob.width * blob.height == 0) {
+    std::ofstream f(path);
+    f << writer.generateHeaderBinary(blob, Eigen::Vector4f::Zero(), Eigen::Quaternionf::Identity());
+    if (!f) throw InputError(path, 0, "cannot write labelled cloud");
+    return;
+  }
+  if (writer.writeBinary(path, blob) != 0) throw InputError(path, 0, "cannot write labelled cloud");
+}
+
+/** Labelled cloud: every point of the input file `input`, in its order and with its fields, plus
+ * its class and track id (class 0, track -1 for the points the range image did not keep). */
+void writeLabelledCloud(const std::string& path, const std::string& input,
+                        const Detector::FrameResult& result) {
+  pcl::PCLPointCloud2 in, out;
+  pcl_movers::io::readScanBlob(input, in);
+  const std::size_t n = static_cast<std::size_t>(in.width) * in.height;
+  std::vector<std::uint32_t> labels(n, 0);
+  std::vector<std::int32_t> tracks(n, -1);
+  for (std::size_t k = 0; k < result.labels.size(); ++k) {
+    const long j = result.input_indices.empty() ? static_cast<long>(k) : result.input_indices[k];
+    if (j < 0 || static_cast<std::size_t>(j) >= n) continue;
+    labels[static_cast<std::size_t>(j)] = result.labels[k];
+    tracks[static_cast<std::size_t>(j)] = result.track_ids[k];
+  }
+  addLabelFields(in, out);
+  out.data.resize(n * out.point_step);
+  for (std::size_t j = 0; j < n; ++j) {
+    std::uint8_t* d = &out.data[j * out.point_step];
+    std::memcpy(d, &in.data[j * in.point_step], in.point_step);
+    std::memcpy(d + in.point_step, &labels[j], 4);
+    std::memcpy(d + in.point_step + 4, &tracks[j], 4);
+  }
+  writeLabelledBlob(path, out);
+}
+
+/** Labelled cloud of a frame whose file could not be read (--skip-bad-frames): no point. */
+void writeEmptyLabelledCloud(const std::string& path) {
+  pcl::PCLPointCloud2 xyz, out;
+  pcl::toPCLPointCloud2(pcl::PointCloud<pcl::PointXYZ>(), xyz);
+  addLabelFields(xyz, out);
+  out.width = 0;
+  out.height = 1;
+  writeLabelledBlob(path, out);
 }
 
 /** Rejects infinite coordinates (NaN marks empty cells and is fine). */
@@ -179,6 +221,7 @@ void installStopHandlers() {
 // ------------------------------------------------------------------ options
 struct Options {
   std::string seq, out;
+  pcl_movers::io::SequenceOptions input;  ///< rate, --poses, --poses-format, --calib
   DetectorParameters params;
   double rate = 10.0;
   bool overwrite = false, labelled = false, force_estimate = false, skip_bad = false;
@@ -192,6 +235,25 @@ double parseRate(const std::string& r) {
   if (end == r.c_str() || *end != '\0' || !(rate > 0) || !std::isfinite(rate))
     throw InputError("--rate: '" + r + "' is not a positive number");
   return rate;
+}
+
+/** --poses, --poses-format, --calib and --estimate-poses, checked together. */
+void parsePoseOptions(int argc, char** argv, Options& o) {
+  auto& in = o.input;
+  std::string format;
+  pcl::console::parse_argument(argc, argv, "--poses", in.poses_path);
+  pcl::console::parse_argument(argc, argv, "--calib", in.calib_path);
+  if (pcl::console::parse_argument(argc, argv, "--poses-format", format) >= 0)
+    in.poses_format = pcl_movers::io::parsePoseFormat(format);
+  o.force_estimate = pcl::console::find_switch(argc, argv, "--estimate-poses");
+  if (in.poses_path.empty() && (!format.empty() || !in.calib_path.empty()))
+    throw InputError(std::string(format.empty() ? "--calib" : "--poses-format") +
+                     " needs --poses FILE");
+  if (!in.poses_path.empty() && o.force_estimate)
+    throw InputError("--poses and --estimate-poses exclude each other: give one");
+  if (!in.calib_path.empty() && in.poses_format != pcl_movers::io::PoseFormat::kitti_camera)
+    throw InputError("--calib is for --poses-format kitti-camera");
+  in.load_poses = !o.force_estimate;  // a bad SEQ/poses.txt does not stop --estimate-poses
 }
 
 /** Options from argv; false when the run is done already (--print-config). */
@@ -210,6 +272,7 @@ bool parseOptions(int argc, char** argv, Options& o) {
     return false;
   }
   if (pcl::console::parse_argument(argc, argv, "--rate", v) >= 0) o.rate = parseRate(v);
+  parsePoseOptions(argc, argv, o);
   if (pcl::console::parse_argument(argc, argv, "--stop-after-frames", v) >= 0) {
     const double n = pcl_movers::tools::parseNumber("--stop-after-frames", v);
     if (!(n >= 1) || n != std::floor(n))
@@ -225,7 +288,7 @@ bool parseOptions(int argc, char** argv, Options& o) {
   o.out = positional[1];
   o.overwrite = pcl::console::find_switch(argc, argv, "--overwrite");
   o.labelled = pcl::console::find_switch(argc, argv, "--labelled-clouds");
-  o.force_estimate = pcl::console::find_switch(argc, argv, "--estimate-poses");
+  o.input.rate_hz = o.rate;
   o.skip_bad = pcl::console::find_switch(argc, argv, "--skip-bad-frames");
   o.resume = pcl::console::find_switch(argc, argv, "--resume");
   if (o.resume && o.overwrite)
@@ -248,7 +311,9 @@ std::string runKey(const Options& o, const pcl_movers::io::SequenceReader& reade
   std::ostringstream key;
   std::error_code ec;
   key << fs::weakly_canonical(o.seq, ec).string() << "\nrate " << o.rate << "\nestimate "
-      << o.force_estimate << "\nlabelled " << o.labelled << "\nskip_bad " << o.skip_bad << "\n";
+      << o.force_estimate << "\nlabelled " << o.labelled << "\nskip_bad " << o.skip_bad
+      << "\nposes " << o.input.poses_path << " " << static_cast<int>(o.input.poses_format) << " "
+      << o.input.calib_path << "\n";
   for (const auto& path : reader.framePaths())
     key << fs::path(path).filename().string() << " " << fs::file_size(path, ec) << "\n";
   key << o.params.toConfig();
@@ -344,6 +409,72 @@ void writeSummary(const Options& o, std::size_t frames, const RunState& st,
   {
     std::ofstream f(tmp);
     f << js.str();
+    if (!f) throw InputError(tmp, 0, "cannot write");
+  }
+  fs::rename(tmp, path);
+}
+
+// ------------------------------------------------------------------ tracks.json
+std::string jsonNumbers(std::initializer_list<double> values, const char* format) {
+  std::string s = "[";
+  char buf[64];
+  for (const double v : values) {
+    std::snprintf(buf, sizeof(buf), format, v);
+    s += (s.size() > 1 ? ", " : "") + std::string(buf);
+  }
+  return s + "]";
+}
+
+/** One number as `format` prints it. */
+std::string jsonNumber(double v, const char* format) {
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), format, v);
+  return buf;
+}
+
+/** A mover of tracks.json: its track, box (sensor frame), world centre, velocity, similarity. */
+std::string moverJson(const pcl_movers::io::TrackRow& r) {
+  std::ostringstream js;
+  js << "{\"track_id\": " << r.track_id << ", \"center\": " << jsonNumbers({r.x, r.y, r.z}, "%.3f")
+     << ", \"size\": " << jsonNumbers({r.length, r.width, r.height}, "%.2f")
+     << ", \"yaw\": " << jsonNumber(r.yaw, "%.4f")
+     << ", \"world_center\": " << jsonNumbers({r.wx, r.wy, r.wz}, "%.3f")
+     << ", \"velocity\": " << jsonNumbers({r.vx, r.vy}, "%.3f")
+     << ", \"speed\": " << jsonNumber(r.speed, "%.3f")
+     << ", \"similarity\": " << jsonNumber(r.similarity, "%.3f") << ", \"points\": " << r.points
+     << "}";
+  return js.str();
+}
+
+/** One frame of tracks.json: index, file number, time, blind, every track id, the movers. */
+std::string frameJson(std::size_t i, long long file, double time, bool blind,
+                      const std::vector<pcl_movers::io::TrackRow>& rows) {
+  std::ostringstream js;
+  char t[32];
+  std::snprintf(t, sizeof(t), "%.3f", time);
+  js << "  {\"frame\": " << i << ", \"file\": " << file << ", \"time\": " << t
+     << ", \"blind\": " << (blind ? "true" : "false") << ", \"track_ids\": [";
+  for (std::size_t k = 0; k < rows.size(); ++k) js << (k ? ", " : "") << rows[k].track_id;
+  js << "], \"movers\": [";
+  bool first = true;
+  for (const auto& r : rows) {
+    if (!r.mover) continue;
+    js << (first ? "" : ", ") << moverJson(r);
+    first = false;
+  }
+  js << "]}";
+  return js.str();
+}
+
+/** tracks.json (a JSON array, one object per frame), through a temporary name. */
+void writeTracksJson(const std::string& path, const std::vector<std::string>& frames) {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream f(tmp);
+    f << "[\n";
+    for (std::size_t k = 0; k < frames.size(); ++k)
+      f << frames[k] << (k + 1 < frames.size() ? ",\n" : "\n");
+    f << "]\n";
     if (!f) throw InputError(tmp, 0, "cannot write");
   }
   fs::rename(tmp, path);
@@ -446,7 +577,8 @@ class DetectRun {
   void processFrame(std::size_t i);
   void replayFrame(std::size_t i, const Detector::FrameResult& result);
   void reportSensor(std::size_t i, const pcl::PointCloud<PointT>& scan);
-  void writeLabelled(std::size_t i, const Detector::FrameResult& result);
+  void writeLabelled(std::size_t i, const Detector::FrameResult& result, bool readable);
+  void clearEarlierOutputs() const;
   std::string labelledPath(std::size_t i) const {
     return o_.out + "/labelled/" + reader_.frameName(i) + ".pcd";
   }
@@ -462,8 +594,24 @@ class DetectRun {
   std::size_t prev_cursor_ = 0;  ///< next line of prev_ a replayed row must equal
   TracksFile tracks_;
   bool out_existed_ = false, created_labelled_dir_ = false, sensor_reported_ = false;
-  std::vector<std::string> created_;  ///< files a failure removes
+  std::vector<std::string> created_;      ///< files a failure removes
+  std::vector<std::string> frames_json_;  ///< tracks.json, one object per frame so far
 };
+
+/** --overwrite: removes what an earlier run of this tool wrote in OUT (tracks.csv, tracks.json,
+ * summary.json, labelled/*.pcd, then labelled/ when that leaves it empty) and nothing else. */
+void DetectRun::clearEarlierOutputs() const {
+  std::error_code ec;
+  for (const char* name : {"tracks.csv", "tracks.json", "summary.json"})
+    fs::remove(fs::path(o_.out) / name, ec);
+  const fs::path labelled = fs::path(o_.out) / "labelled";
+  if (!fs::is_directory(labelled, ec)) return;
+  std::vector<fs::path> pcds;
+  for (const auto& e : fs::directory_iterator(labelled, ec))
+    if (e.is_regular_file(ec) && e.path().extension() == ".pcd") pcds.push_back(e.path());
+  for (const auto& f : pcds) fs::remove(f, ec);
+  if (fs::is_empty(labelled, ec)) fs::remove(labelled, ec);
+}
 
 void DetectRun::prepare() {
   out_existed_ = fs::exists(o_.out);
@@ -474,6 +622,8 @@ void DetectRun::prepare() {
     st_.resumed_from = prev_.frames_done;
   } else {
     pcl_movers::io::prepareOutputDirectory(o_.out, o_.overwrite);
+    if (o_.overwrite) clearEarlierOutputs();
+    created_.push_back(o_.out + "/tracks.json");
     created_.push_back(tracks_path);
     tracks_.create(tracks_path);
     created_.push_back(o_.out + "/summary.json");
@@ -538,14 +688,17 @@ void DetectRun::reportSensor(std::size_t i, const pcl::PointCloud<PointT>& scan)
   print_info("Beam layout %s\n", buf);
 }
 
-void DetectRun::writeLabelled(std::size_t i, const Detector::FrameResult& result) {
+void DetectRun::writeLabelled(std::size_t i, const Detector::FrameResult& result, bool readable) {
   const std::string path = labelledPath(i);
   const bool replay = i < prev_.frames_done;
   if (replay && fs::exists(path)) return;  // written by the run being resumed
   if (!o_.resume && fs::exists(path) && !o_.overwrite)
     throw InputError(path, 0, "exists (use --overwrite)");
   created_.push_back(path);
-  writeLabelledCloud(path + ".tmp", result);
+  if (readable)
+    writeLabelledCloud(path + ".tmp", reader_.framePaths()[i], result);
+  else
+    writeEmptyLabelledCloud(path + ".tmp");
   fs::rename(path + ".tmp", path);
 }
 
@@ -592,6 +745,9 @@ void DetectRun::processFrame(std::size_t i) {
   } catch (const InputError& e) {
     throw InputError(reader_.framePaths()[i] + ": " + e.what());
   }
+  for (auto& r : result.rows) r.file = reader_.frameNumber(i);
+  frames_json_.push_back(
+      frameJson(i, reader_.frameNumber(i), reader_.time(i), result.blind, result.rows));
   if (result.blind && readable) {
     pcl::console::print_warn(
         "[pcl_movers_detect] warning: frame %zu (%s) is blind (%s); its "
@@ -607,7 +763,7 @@ void DetectRun::processFrame(std::size_t i) {
     if (r.mover) st_.mover_ids.insert(r.track_id);
   }
   st_.rows += result.rows.size();
-  if (o_.labelled) writeLabelled(i, result);
+  if (o_.labelled) writeLabelled(i, result, readable);
   if (i < prev_.frames_done)
     replayFrame(i, result);
   else
@@ -645,6 +801,7 @@ int DetectRun::run() {
     throw;
   }
   const int signal = g_stop_signal;
+  writeTracksJson(o_.out + "/tracks.json", frames_json_);
   writeSummary(o_, reader_.size(), st_, signal ? "interrupted" : "finished", signal, estimate_);
   if (signal != 0) {
     pcl::console::print_warn(
@@ -671,10 +828,11 @@ int run(int argc, char** argv) {
   }
   Options o;
   if (!parseOptions(argc, argv, o)) return 0;
-  if (!fs::is_directory(o.seq)) throw InputError(o.seq, 0, "sequence folder does not exist");
-  pcl_movers::io::SequenceReader reader(o.seq, o.rate);
-  if (reader.empty())
-    throw InputError(o.seq, 0, "no frames (frames/*.pcd, *.pcd or velodyne/*.bin)");
+  if (fs::is_regular_file(o.seq))
+    throw InputError(o.seq, 0,
+                     "is a file; SEQ is a sequence folder (the folder holding the scans, or the "
+                     "one holding frames/ or velodyne/)");
+  pcl_movers::io::SequenceReader reader(o.seq, o.input);
   if (fs::exists(o.out) && !fs::is_directory(o.out))
     throw InputError(o.out, 0, "output exists and is not a folder");
   if (fs::exists(o.out) && fs::equivalent(o.out, o.seq))

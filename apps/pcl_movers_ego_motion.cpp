@@ -166,7 +166,9 @@ int run(int argc, char** argv) {
   if (!parent.empty() && !fs::is_directory(parent))
     throw InputError(out_path + ": folder " + parent.string() + " does not exist");
 
-  pcl_movers::io::SequenceReader seq(positional[0]);
+  pcl_movers::io::SequenceOptions input;
+  input.load_poses = false;  // the poses are estimated here: a bad poses.txt does not matter
+  pcl_movers::io::SequenceReader seq(positional[0], input);
   if (seq.empty()) throw InputError(positional[0] + ": no frames found");
   std::size_t n = seq.size();
   if (opt.max_frames > 0) n = std::min<std::size_t>(n, opt.max_frames);

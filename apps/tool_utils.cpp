@@ -64,11 +64,13 @@ std::vector<std::string> positionalArguments(int argc, char** argv,
 std::vector<std::string> listScanInputs(const std::string& file_or_folder) {
   std::error_code ec;
   if (!fs::exists(file_or_folder, ec)) throw InputError(file_or_folder, 0, "does not exist");
-  if (fs::is_directory(file_or_folder, ec)) return io::SequenceReader(file_or_folder).framePaths();
-  std::string ext = fs::path(file_or_folder).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
-  if (ext != ".pcd" && ext != ".bin")
-    throw InputError(file_or_folder, 0, "unknown scan format (expected .pcd or KITTI .bin)");
+  if (fs::is_directory(file_or_folder, ec)) {
+    io::SequenceOptions options;
+    options.load_poses = false;  // only the frames are needed: a bad poses.txt does not matter
+    return io::SequenceReader(file_or_folder, options).framePaths();
+  }
+  if (!io::isScanFile(file_or_folder))
+    throw InputError(file_or_folder, 0, "unknown scan format (expected .pcd, .ply or KITTI .bin)");
   return {file_or_folder};
 }
 

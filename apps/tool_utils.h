@@ -43,7 +43,7 @@ void checkArguments(int argc, char** argv, const std::vector<std::string>& flags
 std::vector<std::string> positionalArguments(int argc, char** argv,
                                              const std::vector<std::string>& with_value);
 
-/** \brief Input scans of a tool that takes "file or folder": a single .pcd/.bin file, or the
+/** \brief Input scans of a tool that takes "file or folder": a single .pcd/.bin/.ply file, or the
  * frames of a sequence folder (see io::SequenceReader), sorted numerically. Throws InputError. */
 std::vector<std::string> listScanInputs(const std::string& file_or_folder);
 

@@ -8,17 +8,24 @@
 #include <pcl_movers/sim/lidar_simulator.h>
 #include <pcl_movers/sim/scenario.h>
 
+#include <pcl/PCLPointCloud2.h>
+#include <pcl/io/pcd_io.h>
+
 #include <gtest/gtest.h>
 
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -269,4 +276,233 @@ TEST_F(DetectTool, BlindAndBadFrames) {
   EXPECT_GT(tracks.size(), rowsBefore(tracks, 15).size() + 100);
   for (const char* frame : {"\n10,", "\n11,", "\n14,"})
     EXPECT_EQ(tracks.find(frame), std::string::npos) << "a row in blind frame" << frame;
+}
+
+// ------------------------------------------------------------------ outputs that line up (#29)
+namespace {
+
+/** The first `n` frames of the fixture's sequence as a flat folder of PCDs numbered from `first`,
+ * unorganized, with fields x y z intensity ring (uint16) time (float), a NaN point first; poses in
+ * `poses_out` (not in the folder), times.txt in it. */
+void writeNumberedSequence(const std::string& src, const std::string& seq, int first, int n,
+                           const std::string& poses_out) {
+  fs::create_directories(seq);
+  std::istringstream poses(readFile(src + "/poses.txt")), times(readFile(src + "/times.txt"));
+  std::string poses_text, times_text, line;
+  for (int k = 0; k < n && std::getline(poses, line); ++k) poses_text += line + "\n";
+  for (int k = 0; k < n && std::getline(times, line); ++k) times_text += line + "\n";
+  writeFile(poses_out, poses_text);
+  writeFile(seq + "/times.txt", times_text);
+  for (int k = 0; k < n; ++k) {
+    char name[32];
+    std::snprintf(name, sizeof(name), "/frames/%06d.pcd", k);
+    pcl::PointCloud<pcl::PointXYZI> in;
+    ASSERT_EQ(pcl::io::loadPCDFile(src + name, in), 0) << name;
+    pcl::PCLPointCloud2 blob;
+    const char* names[6] = {"x", "y", "z", "intensity", "ring", "time"};
+    const std::uint8_t types[6] = {7, 7, 7, 7, pcl::PCLPointField::UINT16, 7};
+    const std::uint32_t offsets[6] = {0, 4, 8, 12, 16, 20};
+    for (int f = 0; f < 6; ++f) {
+      pcl::PCLPointField field;
+      field.name = names[f];
+      field.offset = offsets[f];
+      field.datatype = types[f];
+      field.count = 1;
+      blob.fields.push_back(field);
+    }
+    blob.point_step = 24;
+    blob.height = 1;
+    blob.width = static_cast<std::uint32_t>(in.size() + 1);
+    blob.row_step = blob.point_step * blob.width;
+    blob.is_dense = false;
+    blob.data.assign(blob.width * blob.point_step, 0);
+    for (std::size_t j = 0; j <= in.size(); ++j) {
+      const float nan = std::numeric_limits<float>::quiet_NaN();
+      const float v[4] = {j ? in[j - 1].x : nan, j ? in[j - 1].y : nan, j ? in[j - 1].z : nan,
+                          j ? in[j - 1].intensity : 0.f};
+      const std::uint16_t ring = static_cast<std::uint16_t>(j % 16);
+      const float time = 1e-6f * static_cast<float>(j);
+      std::uint8_t* d = &blob.data[j * blob.point_step];
+      std::memcpy(d, v, 16);
+      std::memcpy(d + 16, &ring, 2);
+      std::memcpy(d + 20, &time, 4);
+    }
+    std::snprintf(name, sizeof(name), "/%06d.pcd", first + k);
+    ASSERT_EQ(pcl::PCDWriter().writeBinary(seq + name, blob), 0);
+  }
+}
+
+/** Byte offset of field `name` in `blob`, or -1. */
+int fieldOffset(const pcl::PCLPointCloud2& blob, const std::string& name) {
+  for (const auto& f : blob.fields)
+    if (f.name == name) return static_cast<int>(f.offset);
+  return -1;
+}
+
+/** Parsed tracks.json through python3's json module: "frame file time [mover ids] [all ids]" a
+ * line, or "" when python3 is missing. */
+std::string tracksJsonSummary(const std::string& path) {
+  const std::string cmd =
+      "python3 -c 'import json,sys\n"
+      "for f in json.load(open(sys.argv[1])):\n"
+      "  print(f[\"frame\"], f[\"file\"], \"%.3f\" % f[\"time\"], sorted(m[\"track_id\"] for m in "
+      "f[\"movers\"]), sorted(f[\"track_ids\"]), all(len(m[\"center\"]) == 3 and "
+      "len(m[\"size\"]) == 3 and len(m[\"velocity\"]) == 2 and 0 <= m[\"similarity\"] <= 1 "
+      "for m in f[\"movers\"]))' " +
+      path + " 2>&1";
+  FILE* pipe = popen(cmd.c_str(), "r");
+  if (!pipe) return "";
+  std::string out;
+  char buf[4096];
+  while (std::size_t n = std::fread(buf, 1, sizeof(buf), pipe)) out.append(buf, n);
+  return pclose(pipe) == 0 ? out : "python3 failed: " + out;
+}
+
+/** The same summary from tracks.csv rows, for frames 0..frames-1. */
+std::string tracksCsvSummary(const std::string& csv, int frames, int first_file) {
+  std::map<int, std::vector<int>> movers, ids;
+  std::map<int, std::string> times;
+  std::istringstream in(csv);
+  std::string line;
+  std::getline(in, line);
+  while (std::getline(in, line)) {
+    std::vector<std::string> c;
+    std::stringstream ss(line);
+    for (std::string cell; std::getline(ss, cell, ',');) c.push_back(cell);
+    const int frame = std::stoi(c[0]);
+    times[frame] = c[2];
+    ids[frame].push_back(std::stoi(c[3]));
+    if (c[4] == "1") movers[frame].push_back(std::stoi(c[3]));
+  }
+  auto list = [](std::vector<int> v) {
+    std::sort(v.begin(), v.end());
+    std::string s = "[";
+    for (std::size_t k = 0; k < v.size(); ++k) s += (k ? ", " : "") + std::to_string(v[k]);
+    return s + "]";
+  };
+  std::string out;
+  for (int f = 0; f < frames; ++f)
+    out += std::to_string(f) + " " + std::to_string(first_file + f) + " " +
+           (times.count(f) ? times[f] : "?") + " " + list(movers[f]) + " " + list(ids[f]) +
+           " True\n";
+  return out;
+}
+
+}  // namespace
+
+// Files 000040..49: tracks.csv says frame 0-9 and file 40-49, labelled clouds are 000040..49.pcd
+// with every input point (a NaN one too) in the input's order and fields, tracks.json agrees.
+TEST_F(DetectTool, FileNumbersPerPointAlignmentAndTracksJson) {
+  const std::string seq = dir_ + "/seq40", out = dir_ + "/out40";
+  writeNumberedSequence(dir_ + "/seq", seq, 40, 10, dir_ + "/poses40.txt");
+  ToolRun r = detect({seq, out, "--labelled-clouds", "--poses", dir_ + "/poses40.txt"}, dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+
+  const std::string csv = readFile(out + "/tracks.csv");
+  ASSERT_EQ(csv.rfind("frame,file,time,track_id,", 0), 0u) << csv.substr(0, 80);
+  std::istringstream rows(csv);
+  std::string line;
+  std::getline(rows, line);
+  std::map<int, std::map<int, bool>> tracks_of_frame;  // frame -> track id -> mover
+  while (std::getline(rows, line)) {
+    int frame = -1, track = -1, mover = -1;
+    long long file = -1;
+    double time = 0;
+    ASSERT_EQ(std::sscanf(line.c_str(), "%d,%lld,%lf,%d,%d", &frame, &file, &time, &track, &mover),
+              5)
+        << line;
+    EXPECT_EQ(file, frame + 40) << line;
+    tracks_of_frame[frame][track] = mover == 1;
+  }
+  ASSERT_FALSE(tracks_of_frame.empty());
+
+  std::vector<std::string> names;
+  for (const auto& e : fs::directory_iterator(out + "/labelled"))
+    names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end());
+  ASSERT_EQ(names.size(), 10u);
+  EXPECT_EQ(names.front(), "000040.pcd");
+  EXPECT_EQ(names.back(), "000049.pcd");
+
+  std::size_t movers = 0;
+  for (int k = 0; k < 10; ++k) {
+    pcl::PCLPointCloud2 in, lab;
+    const std::string name = names[k];
+    ASSERT_EQ(pcl::io::loadPCDFile(seq + "/" + name, in), 0);
+    ASSERT_EQ(pcl::io::loadPCDFile(out + "/labelled/" + name, lab), 0);
+    ASSERT_EQ(lab.width * lab.height, in.width * in.height) << name;
+    for (const char* f : {"x", "y", "z", "intensity", "ring", "time", "label", "track"})
+      ASSERT_GE(fieldOffset(lab, f), 0) << name << " has no field " << f;
+    const int label_at = fieldOffset(lab, "label"), track_at = fieldOffset(lab, "track");
+    for (std::size_t j = 0; j < in.width; ++j) {
+      const std::uint8_t* a = &in.data[j * in.point_step];
+      const std::uint8_t* b = &lab.data[j * lab.point_step];
+      for (const char* f : {"x", "y", "z", "intensity", "ring", "time"})
+        ASSERT_EQ(std::memcmp(a + fieldOffset(in, f), b + fieldOffset(lab, f), 4), 0)
+            << name << " point " << j << " field " << f;
+      std::uint32_t label = 0;
+      std::int32_t track = 0;
+      std::memcpy(&label, b + label_at, 4);
+      std::memcpy(&track, b + track_at, 4);
+      ASSERT_LE(label, 3u);
+      if (j == 0) EXPECT_EQ(label, 0u) << "the NaN point is unlabelled";
+      if (track >= 0) {
+        ASSERT_TRUE(tracks_of_frame[k].count(track)) << name << ": track " << track;
+        EXPECT_EQ(label == 3u, tracks_of_frame[k][track]) << name << ": track " << track;
+      }
+      movers += label == 3u;
+    }
+  }
+  EXPECT_GT(movers, 0u) << "no mover point in any labelled cloud";
+
+  const std::string json = tracksJsonSummary(out + "/tracks.json");
+  if (json.empty()) GTEST_SKIP() << "python3 is missing: tracks.json not parsed";
+  EXPECT_EQ(json, tracksCsvSummary(csv, 10, 40));
+
+  // --resume after an interruption ends with the same tracks.csv, tracks.json and clouds.
+  r = detect({seq, out + "_int", "--labelled-clouds", "--poses", dir_ + "/poses40.txt",
+              "--stop-after-frames", "4"},
+             dir_);
+  ASSERT_EQ(r.exit_code, 130) << r.err;
+  r = detect({seq, out + "_int", "--labelled-clouds", "--poses", dir_ + "/poses40.txt", "--resume"},
+             dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(readFile(out + "_int/tracks.csv"), csv);
+  EXPECT_EQ(readFile(out + "_int/tracks.json"), readFile(out + "/tracks.json"));
+  EXPECT_EQ(readFile(out + "_int/labelled/000047.pcd"), readFile(out + "/labelled/000047.pcd"));
+}
+
+// --overwrite removes what the tool wrote (labelled clouds of the earlier, longer run included)
+// and nothing else; a bad poses.txt does not stop --estimate-poses; a file for SEQ is named.
+TEST_F(DetectTool, OverwriteClearsOnlyItsOwnOutputs) {
+  const std::string seq = dir_ + "/seq_ow", out = dir_ + "/out_ow";
+  writeNumberedSequence(dir_ + "/seq", seq, 0, 8, seq + "/poses.txt");
+  ToolRun r = detect({seq, out, "--labelled-clouds"}, dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  ASSERT_TRUE(fs::exists(out + "/labelled/000007.pcd"));
+  writeFile(out + "/notes.txt", "mine\n");
+  writeFile(out + "/labelled/readme.txt", "mine too\n");
+
+  fs::remove(seq + "/000007.pcd");
+  fs::remove(seq + "/000006.pcd");
+  writeFile(seq + "/poses.txt", "not a pose\n");
+  writeFile(seq + "/times.txt", "0\n0.1\n0.2\n0.3\n0.4\n0.5\n");
+  r = detect({seq, out, "--estimate-poses"}, dir_);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("--overwrite"), std::string::npos) << r.err;
+  r = detect({seq, out, "--estimate-poses", "--overwrite"}, dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(readFile(out + "/notes.txt"), "mine\n");
+  EXPECT_EQ(readFile(out + "/labelled/readme.txt"), "mine too\n");
+  EXPECT_FALSE(fs::exists(out + "/labelled/000000.pcd")) << "an earlier run's cloud is left";
+  EXPECT_FALSE(fs::exists(out + "/labelled/000007.pcd")) << "an earlier run's cloud is left";
+  EXPECT_NE(readFile(out + "/summary.json").find("\"pose_source\": \"estimated\""),
+            std::string::npos);
+  EXPECT_EQ(rowsBefore(readFile(out + "/tracks.csv"), 100),
+            rowsBefore(readFile(out + "/tracks.csv"), 6));
+
+  r = detect({seq + "/000001.pcd", dir_ + "/out_file"}, dir_);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find(seq + "/000001.pcd"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("sequence folder"), std::string::npos) << r.err;
 }

@@ -220,10 +220,17 @@ TEST(SequenceIO, BadInputsNameTheFileAndReason) {
               io::readScan((dir.path() / "cut.bin").string(), cloud);
             }).find("truncated"),
             std::string::npos);
-  // Unknown extension, missing file.
+  // Missing file, malformed PLY, unknown extension.
   expectInputError([&] { io::readScan((dir.path() / "x.ply").string(), cloud); });
   writeText(dir.path() / "x.ply", "ply");
-  expectInputError([&] { io::readScan((dir.path() / "x.ply").string(), cloud); });
+  EXPECT_NE(
+      expectInputError([&] { io::readScan((dir.path() / "x.ply").string(), cloud); }).find("x.ply"),
+      std::string::npos);
+  writeText(dir.path() / "x.xyz", "1 2 3");
+  EXPECT_NE(expectInputError([&] {
+              io::readScan((dir.path() / "x.xyz").string(), cloud);
+            }).find("unknown scan format"),
+            std::string::npos);
 }
 
 TEST(SequenceIO, PoseAndTimeFilesAreChecked) {
@@ -339,6 +346,27 @@ TEST(TracksIO, RoundTripAndErrors) {
             std::string::npos);
   writeText(dir.path() / "nohead.csv", "1,2,3\n");
   expectInputError([&] { io::readTracks((dir.path() / "nohead.csv").string()); });
+}
+
+// The `file` column (#29): the input file's number beside the 0-based frame index; tracks.csv
+// files written before it are read with file = frame.
+TEST(TracksIO, FileColumnBesideTheFrameIndex) {
+  TempDir dir;
+  io::TrackRow r;
+  r.frame = 3;
+  r.file = 43;
+  r.track_id = 7;
+  const auto path = (dir.path() / "tracks.csv").string();
+  io::writeTracks(path, {r});
+  EXPECT_EQ(io::formatTrackRow(r).rfind("3,43,", 0), 0u) << io::formatTrackRow(r);
+  EXPECT_EQ(io::readTracks(path).at(0).file, 43);
+  writeText(dir.path() / "old.csv",
+            "frame,time,track_id,mover,x,y,z,wx,wy,wz,vx,vy,speed,length,width,height,yaw,"
+            "similarity,points\n5,0.5,7,1,0,0,0,0,0,0,0,0,0,0,0,0,0,0,9\n");
+  const auto old = io::readTracks((dir.path() / "old.csv").string());
+  ASSERT_EQ(old.size(), 1u);
+  EXPECT_EQ(old[0].file, 5);
+  EXPECT_EQ(old[0].points, 9);
 }
 
 TEST(SharedData, ReadsEverySet) {

@@ -82,6 +82,10 @@ class MoverDetector {
     /** Per point of `organized`: Label, and the track id (-1 when none). */
     std::vector<std::uint8_t> labels;
     std::vector<int> track_ids;
+    /** Per point of `organized`: the index of the input scan's point it holds, -1 for an empty
+     * cell; empty when the input was organized already (point i is then input point i). Writes
+     * per-point results back in the input's order. */
+    std::vector<int> input_indices;
     /** Number of clusters the segmentation produced (before size filtering). */
     int clusters = 0;
     /** A frame without observations: no finite return, or (sensor "auto") too few returns to
@@ -218,6 +222,7 @@ class MoverDetector {
   StageObject<GroundPlaneFilter<PointT>> ground_;
   StageObject<RangeImageRegionGrowing<PointT>> segmenter_;
   StageObject<PointCloud> organized_buffer_;  ///< the last range image, reused when released
+  std::vector<int> input_indices_;            ///< input index of each cell of the last range image
   std::vector<std::pair<std::string, double>> timings_;
 };
 

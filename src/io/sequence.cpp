@@ -6,14 +6,18 @@
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/conversions.h>
 #include <pcl/io/pcd_io.h>
+#include <pcl/io/ply_io.h>
 
 #include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <iterator>
+#include <map>
 #include <sstream>
 
 namespace fs = std::filesystem;
@@ -29,7 +33,7 @@ bool hasExtension(const fs::path& p, const char* ext) {
 }
 
 /** The last run of digits in the file stem, or -1 when there is none. */
-long long frameNumber(const std::string& path) {
+long long fileNumber(const std::string& path) {
   const std::string stem = fs::path(path).stem().string();
   long long value = -1;
   std::size_t i = stem.size();
@@ -262,47 +266,55 @@ Eigen::Isometry3d isometryFromViewpoint(const std::string& path, const Eigen::Ve
 
 void sortNumerically(std::vector<std::string>& paths) {
   std::stable_sort(paths.begin(), paths.end(), [](const std::string& a, const std::string& b) {
-    const long long na = frameNumber(a), nb = frameNumber(b);
+    const long long na = fileNumber(a), nb = fileNumber(b);
     if (na != nb) return na < nb;
     return a < b;
   });
 }
 
-template <typename PointT>
-void readScan(const std::string& path, pcl::PointCloud<PointT>& cloud) {
-  std::error_code ec;
-  if (!fs::exists(path, ec)) throw InputError(path, 0, "file does not exist");
-  if (!fs::is_regular_file(path, ec)) throw InputError(path, 0, "not a regular file");
-  if (hasExtension(path, ".bin")) {
-    readKittiBin(path, cloud);
-    return;
+namespace {
+
+/** PCD or PLY file into a blob that has x y z; throws InputError naming the file. */
+void readBlob(const std::string& path, pcl::PCLPointCloud2& blob, Eigen::Vector4f& origin,
+              Eigen::Quaternionf& orientation) {
+  if (hasExtension(path, ".ply")) {
+    pcl::PLYReader reader;
+    int version = 0, status = -1;
+    try {
+      status = reader.read(path, blob, origin, orientation, version);
+    } catch (const std::exception& e) {
+      throw InputError(path, 0, std::string("not a readable PLY file (") + e.what() + ")");
+    }
+    if (status < 0) throw InputError(path, 0, "not a readable PLY file");
+  } else if (hasExtension(path, ".pcd")) {
+    readPcdHeader(path, blob, origin, orientation);
+    for (const char* f : {"x", "y", "z"})
+      if (!hasField(blob, f))
+        throw InputError(path, 0, std::string("PCD has no '") + f + "' field");
+    pcl::PCDReader reader;
+    int pcd_version = 0;
+    if (reader.read(path, blob, origin, orientation, pcd_version) < 0)
+      throw InputError(path, 0, "could not read PCD data (truncated or malformed file)");
+  } else {
+    throw InputError(path, 0, "unknown scan format (expected .pcd, .ply or KITTI .bin)");
   }
-  if (!hasExtension(path, ".pcd"))
-    throw InputError(path, 0, "unknown scan format (expected .pcd or KITTI .bin)");
-  pcl::PCLPointCloud2 header;
-  Eigen::Vector4f origin;
-  Eigen::Quaternionf orientation;
-  readPcdHeader(path, header, origin, orientation);
   for (const char* f : {"x", "y", "z"})
-    if (!hasField(header, f))
-      throw InputError(path, 0, std::string("PCD has no '") + f + "' field");
-  pcl::PCLPointCloud2 blob;
-  pcl::PCDReader reader;
-  int pcd_version = 0;
-  if (reader.read(path, blob, origin, orientation, pcd_version) < 0)
-    throw InputError(path, 0, "could not read PCD data (truncated or malformed file)");
+    if (!hasField(blob, f)) throw InputError(path, 0, std::string("scan has no '") + f + "' field");
   if (blob.data.size() < static_cast<std::size_t>(blob.width) * blob.height * blob.point_step)
-    throw InputError(path, 0, "truncated PCD data");
+    throw InputError(path, 0, "truncated point data");
+}
+
+/** The blob's points as PointT (intensity 0 when the blob has none). */
+template <typename PointT>
+void blobToCloud(const pcl::PCLPointCloud2& blob, pcl::PointCloud<PointT>& cloud) {
   if (static_cast<std::size_t>(blob.width) * blob.height == 0) {
     // pcl::fromPCLPointCloud2 indexes the first point even of an empty blob: return empty here.
     cloud.clear();
-    cloud.sensor_origin_ = origin;
-    cloud.sensor_orientation_ = orientation;
     return;
   }
   if constexpr (pcl::traits::has_intensity_v<PointT>) {
     if (!hasField(blob, "intensity")) {
-      // A PCD without intensity is still a valid scan: read x y z, intensity 0.
+      // A scan without intensity is still a valid scan: read x y z, intensity 0.
       pcl::PointCloud<pcl::PointXYZ> xyz;
       pcl::fromPCLPointCloud2(blob, xyz);
       cloud.resize(xyz.size());
@@ -315,14 +327,75 @@ void readScan(const std::string& path, pcl::PointCloud<PointT>& cloud) {
       cloud.width = xyz.width;
       cloud.height = xyz.height;
       cloud.is_dense = xyz.is_dense;
-    } else {
-      pcl::fromPCLPointCloud2(blob, cloud);
+      return;
     }
-  } else {
-    pcl::fromPCLPointCloud2(blob, cloud);
   }
+  pcl::fromPCLPointCloud2(blob, cloud);
+}
+
+void checkScanFile(const std::string& path) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw InputError(path, 0, "file does not exist");
+  if (!fs::is_regular_file(path, ec)) throw InputError(path, 0, "not a regular file");
+}
+
+}  // namespace
+
+template <typename PointT>
+void readScan(const std::string& path, pcl::PointCloud<PointT>& cloud) {
+  checkScanFile(path);
+  if (hasExtension(path, ".bin")) {
+    readKittiBin(path, cloud);
+    return;
+  }
+  pcl::PCLPointCloud2 blob;
+  Eigen::Vector4f origin = Eigen::Vector4f::Zero();
+  Eigen::Quaternionf orientation = Eigen::Quaternionf::Identity();
+  readBlob(path, blob, origin, orientation);
+  blobToCloud(blob, cloud);
   cloud.sensor_origin_ = origin;
   cloud.sensor_orientation_ = orientation;
+}
+
+void readScanBlob(const std::string& path, pcl::PCLPointCloud2& blob) {
+  checkScanFile(path);
+  if (hasExtension(path, ".bin")) {
+    // x y z intensity, 16 bytes a point as in the file (no padding of pcl::PointXYZI).
+    pcl::PointCloud<pcl::PointXYZI> cloud;
+    readKittiBin(path, cloud);
+    blob = pcl::PCLPointCloud2();
+    const char* names[4] = {"x", "y", "z", "intensity"};
+    for (std::uint32_t f = 0; f < 4; ++f) {
+      pcl::PCLPointField field;
+      field.name = names[f];
+      field.offset = 4 * f;
+      field.datatype = pcl::PCLPointField::FLOAT32;
+      field.count = 1;
+      blob.fields.push_back(field);
+    }
+    blob.point_step = 16;
+    blob.height = 1;
+    blob.width = static_cast<std::uint32_t>(cloud.size());
+    blob.row_step = blob.point_step * blob.width;
+    blob.is_dense = cloud.is_dense;
+    blob.data.resize(cloud.size() * blob.point_step);
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+      const float v[4] = {cloud[i].x, cloud[i].y, cloud[i].z, cloud[i].intensity};
+      std::memcpy(&blob.data[i * blob.point_step], v, sizeof(v));
+    }
+    return;
+  }
+  Eigen::Vector4f origin;
+  Eigen::Quaternionf orientation;
+  readBlob(path, blob, origin, orientation);
+}
+
+bool isScanFile(const std::string& path) {
+  return hasExtension(path, ".pcd") || hasExtension(path, ".bin") || hasExtension(path, ".ply");
+}
+
+long long frameNumber(const std::string& path) {
+  return fileNumber(path);
 }
 
 std::vector<Eigen::Isometry3d> readPoses(const std::string& path) {
@@ -408,7 +481,154 @@ void writeTimes(const std::string& path, const std::vector<double>& times) {
   if (!out) throw InputError(path, 0, "write failed");
 }
 
+namespace {
+
+/** The scan files directly in `folder` (.pcd, .bin or .ply, one format), sorted numerically;
+ * empty when there are none. Throws InputError naming the folder when formats are mixed. */
+std::vector<std::string> listScans(const fs::path& folder) {
+  std::map<std::string, std::vector<std::string>> by_ext;
+  for (const char* ext : {".pcd", ".bin", ".ply"}) {
+    auto files = listFiles(folder, ext);
+    if (!files.empty()) by_ext[ext] = std::move(files);
+  }
+  if (by_ext.empty()) return {};
+  if (by_ext.size() > 1) {
+    std::string found;
+    for (const auto& kv : by_ext)
+      found += (found.empty() ? "" : " and ") + std::to_string(kv.second.size()) + " " + kv.first;
+    throw InputError(folder.string(), 0, found + " files: keep one format");
+  }
+  return by_ext.begin()->second;
+}
+
+/** Median spacing of the frame times (0.1 s with fewer than two frames). */
+double framePeriod(const std::vector<double>& times) {
+  std::vector<double> gaps;
+  for (std::size_t i = 1; i < times.size(); ++i) gaps.push_back(times[i] - times[i - 1]);
+  if (gaps.empty()) return 0.1;
+  std::nth_element(gaps.begin(), gaps.begin() + gaps.size() / 2, gaps.end());
+  return gaps[gaps.size() / 2];
+}
+
+}  // namespace
+
+PoseFormat parsePoseFormat(const std::string& name) {
+  if (name == "kitti") return PoseFormat::kitti;
+  if (name == "tum") return PoseFormat::tum;
+  if (name == "kitti-camera") return PoseFormat::kitti_camera;
+  throw InputError("--poses-format: '" + name + "' is not one of kitti, tum, kitti-camera");
+}
+
+std::vector<StampedPose> readTumPoses(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path, 0, "cannot open pose file");
+  std::vector<StampedPose> poses;
+  std::string line;
+  std::size_t line_no = 0;
+  while (std::getline(in, line)) {
+    ++line_no;
+    const std::size_t first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos || line[first] == '#') continue;
+    std::istringstream row(line);
+    double v[8];
+    int count = 0;
+    for (double x; count < 9 && row >> x; ++count)
+      if (count < 8) v[count] = x;
+    std::string rest;
+    if (count != 8 || !(row.eof() || (row.clear(), !(row >> rest))))
+      throw InputError(path, line_no, "expected 8 numbers: timestamp x y z qx qy qz qw (TUM)");
+    for (const double value : v)
+      if (!std::isfinite(value)) throw InputError(path, line_no, "pose has NaN/Inf entries");
+    const Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);
+    if (std::abs(q.norm() - 1.0) > 1e-3)
+      throw InputError(path, line_no, "quaternion qx qy qz qw is not of unit length");
+    if (!poses.empty() && v[0] <= poses.back().time)
+      throw InputError(path, line_no, "timestamps must increase");
+    StampedPose p{v[0], Eigen::Isometry3d::Identity()};
+    p.pose.linear() = q.normalized().toRotationMatrix();
+    p.pose.translation() = Eigen::Vector3d(v[1], v[2], v[3]);
+    poses.push_back(p);
+  }
+  if (poses.empty()) throw InputError(path, 0, "no poses in the file");
+  return poses;
+}
+
+Eigen::Isometry3d readKittiCalibTr(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path, 0, "cannot open calibration file");
+  std::string line;
+  std::size_t line_no = 0;
+  while (std::getline(in, line)) {
+    ++line_no;
+    std::istringstream row(line);
+    std::string key;
+    if (!(row >> key) || (key != "Tr:" && key != "Tr_velo_to_cam:" && key != "Tr_velo_cam:"))
+      continue;
+    double v[12];
+    for (double& x : v)
+      if (!(row >> x) || !std::isfinite(x))
+        throw InputError(path, line_no, "expected 12 numbers after " + key);
+    Eigen::Isometry3d tr = Eigen::Isometry3d::Identity();
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 4; ++c) tr.matrix()(r, c) = v[4 * r + c];
+    if ((tr.linear().transpose() * tr.linear() - Eigen::Matrix3d::Identity()).norm() > 1e-3)
+      throw InputError(path, line_no, "rotation part of " + key + " is not orthonormal");
+    return tr;
+  }
+  throw InputError(path, 0, "no 'Tr:' row (velodyne to camera 0) in the calibration file");
+}
+
+std::vector<Eigen::Isometry3d> cameraToVelodynePoses(const std::vector<Eigen::Isometry3d>& cam,
+                                                     const Eigen::Isometry3d& tr) {
+  std::vector<Eigen::Isometry3d> velo;
+  velo.reserve(cam.size());
+  const Eigen::Isometry3d tr_inv = tr.inverse();
+  for (const auto& p : cam) velo.push_back(tr_inv * p * tr);
+  return velo;
+}
+
+std::vector<Eigen::Isometry3d> posesAtTimes(const std::vector<StampedPose>& stamped,
+                                            const std::vector<double>& times,
+                                            const std::string& path, double tolerance) {
+  std::vector<Eigen::Isometry3d> out;
+  for (std::size_t i = 0; i < times.size(); ++i) {
+    const double t = times[i];
+    const auto after =
+        std::lower_bound(stamped.begin(), stamped.end(), t,
+                         [](const StampedPose& p, double time) { return p.time < time; });
+    const bool has_after = after != stamped.end(), has_before = after != stamped.begin();
+    const double d_after = has_after ? after->time - t : INFINITY;
+    const double d_before = has_before ? t - std::prev(after)->time : INFINITY;
+    const double nearest = std::min(d_after, d_before);
+    if (!(nearest <= tolerance)) {
+      std::ostringstream why;
+      why << std::setprecision(10) << "no pose for frame " << i << " at time " << t
+          << " s: the nearest pose is at " << (d_after < d_before ? after->time : t - d_before)
+          << " s, more than " << std::setprecision(3) << tolerance << " s away";
+      throw InputError(path, 0, why.str());
+    }
+    if (!has_after || !has_before || d_after == 0.0) {
+      out.push_back(d_after <= d_before ? after->pose : std::prev(after)->pose);
+      continue;
+    }
+    const StampedPose& a = *std::prev(after);
+    const double s = d_before / (after->time - a.time);
+    const Eigen::Quaterniond qa(a.pose.linear()), qb(after->pose.linear());
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.linear() = qa.slerp(s, qb).toRotationMatrix();
+    pose.translation() = (1 - s) * a.pose.translation() + s * after->pose.translation();
+    out.push_back(pose);
+  }
+  return out;
+}
+
 void SequenceReader::open(const std::string& folder, double rate_hz) {
+  SequenceOptions options;
+  options.rate_hz = rate_hz;
+  open(folder, options);
+}
+
+void SequenceReader::open(const std::string& folder, const SequenceOptions& options) {
   folder_ = folder;
   frame_paths_.clear();
   poses_.clear();
@@ -417,21 +637,52 @@ void SequenceReader::open(const std::string& folder, double rate_hz) {
   has_times_ = false;
   std::error_code ec;
   if (!fs::exists(folder, ec)) throw InputError(folder, 0, "sequence folder does not exist");
-  if (!fs::is_directory(folder, ec)) throw InputError(folder, 0, "not a folder");
+  if (!fs::is_directory(folder, ec))
+    throw InputError(folder, 0,
+                     isScanFile(folder) ? "is a scan file; a sequence folder is expected (the "
+                                          "folder holding it, or frames/ or velodyne/ beside it)"
+                                        : "not a folder");
   const fs::path root(folder);
-  frame_paths_ = listFiles(root / "frames", ".pcd");
-  if (frame_paths_.empty()) frame_paths_ = listFiles(root, ".pcd");
-  if (frame_paths_.empty()) frame_paths_ = listFiles(root / "velodyne", ".bin");
+  for (const fs::path& where : {root / "frames", root, root / "velodyne"}) {
+    frame_paths_ = listScans(where);
+    if (!frame_paths_.empty()) break;
+  }
   if (frame_paths_.empty())
-    throw InputError(folder, 0, "no frames (expected frames/*.pcd, *.pcd or velodyne/*.bin)");
+    throw InputError(folder, 0,
+                     "no frames (expected .pcd, .bin or .ply scans in the folder, in frames/ or "
+                     "in velodyne/)");
+  loadTimes(options.rate_hz);
+  if (options.load_poses) loadPoses(options);
+}
 
-  const std::string poses_path = (root / "poses.txt").string();
-  if (fs::exists(poses_path, ec)) {
-    poses_ = readPoses(poses_path);
-    if (poses_.size() != frame_paths_.size())
-      throw InputError(poses_path, 0,
-                       "has " + std::to_string(poses_.size()) + " poses but the sequence has " +
+void SequenceReader::loadTimes(double rate_hz) {
+  std::error_code ec;
+  const std::string times_path = (fs::path(folder_) / "times.txt").string();
+  if (fs::exists(times_path, ec)) {
+    times_ = io::readTimes(times_path);
+    if (times_.size() != frame_paths_.size())
+      throw InputError(times_path, 0,
+                       "has " + std::to_string(times_.size()) +
+                           " timestamps but the sequence has " +
                            std::to_string(frame_paths_.size()) + " frames");
+    has_times_ = true;
+    return;
+  }
+  if (!(rate_hz > 0.0) || !std::isfinite(rate_hz))
+    throw InputError("--rate: must be positive, got " + std::to_string(rate_hz));
+  for (std::size_t i = 0; i < frame_paths_.size(); ++i) times_.push_back(double(i) / rate_hz);
+}
+
+void SequenceReader::loadPoses(const SequenceOptions& options) {
+  std::error_code ec;
+  if (!options.poses_path.empty()) {
+    loadPoseFile(options);
+    return;
+  }
+  const std::string poses_path = (fs::path(folder_) / "poses.txt").string();
+  if (fs::exists(poses_path, ec)) {
+    poses_ = io::readPoses(poses_path);
+    checkPoseCount(poses_path);
     pose_source_ = "poses.txt";
   } else if (hasExtension(frame_paths_.front(), ".pcd")) {
     pcl::PCLPointCloud2 header;
@@ -446,21 +697,47 @@ void SequenceReader::open(const std::string& folder, double rate_hz) {
       pose_source_ = "viewpoint";
     }
   }
+}
 
-  const std::string times_path = (root / "times.txt").string();
-  if (fs::exists(times_path, ec)) {
-    times_ = readTimes(times_path);
-    if (times_.size() != frame_paths_.size())
-      throw InputError(times_path, 0,
-                       "has " + std::to_string(times_.size()) +
-                           " timestamps but the sequence has " +
-                           std::to_string(frame_paths_.size()) + " frames");
-    has_times_ = true;
-  } else {
-    if (!(rate_hz > 0.0) || !std::isfinite(rate_hz))
-      throw InputError("rate must be positive, got " + std::to_string(rate_hz));
-    for (std::size_t i = 0; i < frame_paths_.size(); ++i) times_.push_back(double(i) / rate_hz);
+void SequenceReader::loadPoseFile(const SequenceOptions& options) {
+  const std::string& path = options.poses_path;
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) throw InputError(path, 0, "--poses: file does not exist");
+  switch (options.poses_format) {
+    case PoseFormat::kitti:
+      poses_ = io::readPoses(path);
+      pose_source_ = path + " (kitti)";
+      break;
+    case PoseFormat::kitti_camera:
+      if (options.calib_path.empty())
+        throw InputError("--poses-format kitti-camera needs --calib FILE (KITTI calib.txt)");
+      poses_ = cameraToVelodynePoses(io::readPoses(path), readKittiCalibTr(options.calib_path));
+      pose_source_ = path + " (kitti-camera, " + options.calib_path + ")";
+      break;
+    case PoseFormat::tum: {
+      const auto stamped = readTumPoses(path);
+      if (stamped.size() == frame_paths_.size()) {
+        for (const auto& p : stamped) poses_.push_back(p.pose);
+      } else {
+        poses_ = posesAtTimes(stamped, times_, path, 0.5 * framePeriod(times_));
+      }
+      pose_source_ = path + " (tum)";
+      break;
+    }
   }
+  checkPoseCount(path);
+}
+
+void SequenceReader::checkPoseCount(const std::string& path) const {
+  if (poses_.size() != frame_paths_.size())
+    throw InputError(path, 0,
+                     "has " + std::to_string(poses_.size()) + " poses but the sequence has " +
+                         std::to_string(frame_paths_.size()) + " frames");
+}
+
+long long SequenceReader::frameNumber(std::size_t i) const {
+  const long long n = fileNumber(frame_paths_.at(i));
+  return n >= 0 ? n : static_cast<long long>(i);
 }
 
 std::string SequenceReader::frameName(std::size_t i) const {

@@ -12,19 +12,27 @@
 namespace pcl_movers {
 namespace io {
 
+namespace {
+/** The header before the `file` column (read, so older tracks.csv files stay readable). */
+const char* kHeaderWithoutFile =
+    "frame,time,track_id,mover,x,y,z,wx,wy,wz,vx,vy,speed,length,width,height,yaw,similarity,"
+    "points";
+}  // namespace
+
 const char* tracksCsvHeader() {
-  return "frame,time,track_id,mover,x,y,z,wx,wy,wz,vx,vy,speed,length,width,height,yaw,similarity,"
-         "points";
+  return "frame,file,time,track_id,mover,x,y,z,wx,wy,wz,vx,vy,speed,length,width,height,yaw,"
+         "similarity,points";
 }
 
 std::string formatTrackRow(const TrackRow& r) {
   char buf[512];
   std::snprintf(
       buf, sizeof(buf),
-      "%d,%.3f,%d,%d,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.2f,%.2f,%.2f,%.4f,%.3f,"
-      "%d",
-      r.frame, r.time, r.track_id, r.mover ? 1 : 0, r.x, r.y, r.z, r.wx, r.wy, r.wz, r.vx, r.vy,
-      r.speed, r.length, r.width, r.height, r.yaw, r.similarity, r.points);
+      "%d,%lld,%.3f,%d,%d,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.2f,%.2f,%.2f,%.4f,"
+      "%.3f,%d",
+      r.frame, r.file >= 0 ? r.file : static_cast<long long>(r.frame), r.time, r.track_id,
+      r.mover ? 1 : 0, r.x, r.y, r.z, r.wx, r.wy, r.wz, r.vx, r.vy, r.speed, r.length, r.width,
+      r.height, r.yaw, r.similarity, r.points);
   return buf;
 }
 
@@ -43,8 +51,10 @@ std::vector<TrackRow> readTracks(const std::string& path) {
   std::size_t line_no = 1;
   if (!std::getline(in, line)) throw InputError(path, 1, "empty file (expected a header row)");
   if (!line.empty() && line.back() == '\r') line.pop_back();
-  if (line != tracksCsvHeader())
+  const bool with_file = line == tracksCsvHeader();
+  if (!with_file && line != kHeaderWithoutFile)
     throw InputError(path, 1, std::string("unexpected header, expected: ") + tracksCsvHeader());
+  const std::size_t columns = with_file ? 20 : 19;
   std::vector<TrackRow> rows;
   while (std::getline(in, line)) {
     ++line_no;
@@ -53,8 +63,10 @@ std::vector<TrackRow> readTracks(const std::string& path) {
     std::stringstream ss(line);
     std::string cell;
     while (std::getline(ss, cell, ',')) cells.push_back(cell);
-    if (cells.size() != 19)
-      throw InputError(path, line_no, "expected 19 columns, found " + std::to_string(cells.size()));
+    if (cells.size() != columns)
+      throw InputError(path, line_no,
+                       "expected " + std::to_string(columns) + " columns, found " +
+                           std::to_string(cells.size()));
     TrackRow r;
     try {
       std::size_t k = 0;
@@ -68,6 +80,7 @@ std::vector<TrackRow> readTracks(const std::string& path) {
         return v;
       };
       r.frame = static_cast<int>(num());
+      r.file = with_file ? static_cast<long long>(num()) : r.frame;
       r.time = num();
       r.track_id = static_cast<int>(num());
       const double mover = num();

@@ -107,6 +107,7 @@ typename MoverDetector<PointT>::PointCloudConstPtr MoverDetector<PointT>::organi
   }
   organizer_.object->setInputCloud(scan);
   organizer_.object->organize(*organized);
+  input_indices_ = organizer_.object->getIndexImage();
 #else
   // Plain projection onto the sensor model's grid, nearest return per cell.
   const int rows = sensor_model_.rows(), cols = sensor_model_.columns();
@@ -117,7 +118,9 @@ typename MoverDetector<PointT>::PointCloudConstPtr MoverDetector<PointT>::organi
   organized->height = rows;
   organized->is_dense = false;
   std::vector<float> best(organized->size(), std::numeric_limits<float>::max());
-  for (const auto& pt : scan->points) {
+  input_indices_.assign(organized->size(), -1);
+  for (std::size_t j = 0; j < scan->size(); ++j) {
+    const auto& pt = (*scan)[j];
     if (!std::isfinite(pt.x) || !std::isfinite(pt.y) || !std::isfinite(pt.z)) continue;
     const float rxy = std::hypot(pt.x, pt.y);
     const int r = sensor_model_.rowOf(std::atan2(pt.z, rxy));
@@ -128,6 +131,7 @@ typename MoverDetector<PointT>::PointCloudConstPtr MoverDetector<PointT>::organi
     if (range < best[k]) {
       best[k] = range;
       organized->points[k] = pt;
+      input_indices_[k] = static_cast<int>(j);
     }
   }
 #endif
@@ -216,6 +220,7 @@ void MoverDetector<PointT>::process(const PointCloudConstPtr& scan,
   const auto t0 = Clock::now();
   const PointCloudConstPtr organized = organize(scan);
   result.organized = organized;
+  if (organized != scan) result.input_indices = input_indices_;
   const std::size_t n = organized->size();
 
   // Ground removal: indices of the non-ground points.
