@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <deque>
 #include <limits>
 #include <mutex>
@@ -384,6 +385,25 @@ std::vector<VelodyneSweep> VelodyneCapture::readWithGrabberThread(const std::str
   impl.finishSweep(false);
   return std::vector<VelodyneSweep>(std::make_move_iterator(impl.done_.begin()),
                                     std::make_move_iterator(impl.done_.end()));
+}
+
+VelodyneModel detectVelodyneModel(const std::string& pcap_path) {
+  PcapReader reader(pcap_path);
+  UdpDatagram datagram;
+  while (reader.next(datagram)) {
+    if (datagram.payload.size() != kPacketSize) continue;
+    const std::uint8_t* data = datagram.payload.data();
+    for (int b = 0; b < 12; ++b)
+      if (little16(data + 100 * b) == kLowerBlock) return VelodyneModel::kHdl64;
+    if (data[1205] == kFactoryVlp16) return VelodyneModel::kVlp16;
+    if (data[1205] == kFactoryHdl32) return VelodyneModel::kHdl32;
+    char hex[8];
+    std::snprintf(hex, sizeof(hex), "0x%02x", unsigned(data[1205]));
+    throw InputError(pcap_path, 0,
+                     std::string("cannot tell the sensor from the factory byte ") + hex +
+                         ": give it (hdl32, vlp16, hdl64)");
+  }
+  throw InputError(pcap_path, 0, "no Velodyne data packets (UDP payloads of 1206 bytes)");
 }
 
 std::vector<VelodyneSweep> readVelodyneCapture(const std::string& pcap_path, VelodyneModel model,

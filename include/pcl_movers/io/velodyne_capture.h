@@ -133,6 +133,11 @@ class VelodyneCapture {
   std::unique_ptr<Impl> impl_;
 };
 
+/** \brief The sensor of a capture, from its first data packet: lower-block (0xDDFF) blocks →
+ * HDL-64E, factory byte 0x22 → VLP-16, 0x21 → HDL-32E (the manuals' "factory bytes"). Throws
+ * InputError naming the file when it has no data packet or the packet does not tell. */
+VelodyneModel detectVelodyneModel(const std::string& pcap_path);
+
 /** \brief Reads all full sweeps of a capture (VelodyneCapture::next until the end). Throws
  * InputError naming the file when the capture has no Velodyne data packet or no full sweep. */
 std::vector<VelodyneSweep> readVelodyneCapture(const std::string& pcap_path, VelodyneModel model,
