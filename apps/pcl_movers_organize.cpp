@@ -121,9 +121,14 @@ void writeAtomically(const std::string& path, const Cloud& cloud, OutputGuard& g
 
 /** --pcap: the full sweeps of a Velodyne capture → OUT_FOLDER/frames/NNNNNN.pcd + times.txt. */
 int runCapture(const Options& opt, const std::string& output, bool columns_given) {
-  const pcl_movers::io::VelodyneModel model =
-      opt.sensor == "auto" ? pcl_movers::io::detectVelodyneModel(opt.pcap)
-                           : pcl_movers::io::velodyneModelFromName(opt.sensor);
+  pcl_movers::io::VelodyneModel model;
+  try {
+    model = opt.sensor == "auto" ? pcl_movers::io::detectVelodyneModel(opt.pcap)
+                                 : pcl_movers::io::velodyneModelFromName(opt.sensor);
+  } catch (const InputError& e) {
+    if (opt.sensor == "auto") throw;
+    throw InputError(std::string("--sensor: ") + e.what());
+  }
   pcl_movers::io::VelodyneCapture capture(opt.pcap, model, opt.calibration);
   if (columns_given) capture.setColumns(opt.columns);
   // The first sweep before anything is created: no output for a capture without one.

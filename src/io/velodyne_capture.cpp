@@ -300,7 +300,12 @@ void VelodyneCapture::Impl::addPacket(const std::uint8_t* data, double capture_t
 VelodyneCapture::VelodyneCapture(const std::string& pcap_path, VelodyneModel model,
                                  const std::string& calibration) {
   auto reader = std::make_unique<PcapReader>(pcap_path);  // checks the file first
-  impl_ = std::make_unique<Impl>(model, calibration, "");
+  try {
+    impl_ = std::make_unique<Impl>(model, calibration, "");
+  } catch (const InputError& e) {
+    if (!calibration.empty()) throw;  // the message names the calibration file
+    throw InputError(pcap_path, 0, e.what());
+  }
   impl_->path_ = pcap_path;
   impl_->reader_ = std::move(reader);
 }
