@@ -44,12 +44,24 @@ const std::string kMonterey = std::string(PCL_MOVERS_SHARED_DATA) +
   if (!fs::exists(kMonterey))   \
   GTEST_SKIP() << kMonterey << " is absent (the real HDL-32E capture, ../shared/data)"
 
-std::string tempPath(const std::string& name) {
-  const fs::path dir =
-      fs::temp_directory_path() / ("pcl_movers_velodyne_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  return (dir / name).string();
+fs::path tempDir() {
+  return fs::temp_directory_path() / ("pcl_movers_velodyne_" + std::to_string(::getpid()));
 }
+
+std::string tempPath(const std::string& name) {
+  fs::create_directories(tempDir());
+  return (tempDir() / name).string();
+}
+
+/** Removes this process's captures at the end. */
+class TempCleanup : public ::testing::Environment {
+ public:
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(tempDir(), ec);
+  }
+};
+const auto* const kCleanup = ::testing::AddGlobalTestEnvironment(new TempCleanup);
 
 /** Height of the sensor above the ground: a RANSAC plane through the returns of the lowest
  * `beams` rows within 25 m, distance of the sensor origin to it. */
