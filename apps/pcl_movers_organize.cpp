@@ -1,9 +1,11 @@
 /*
  * pcl_movers_organize — unorganized LiDAR scans (PCD or KITTI .bin) → organized range-image PCDs
- * (RangeImageOrganizer): rows = beams top to bottom, columns = azimuth, NaN in empty cells.
+ * (RangeImageOrganizer): rows = beams top to bottom, columns = azimuth, NaN in empty cells; or a
+ * Velodyne packet capture (--pcap) → one organized PCD per sweep (io::VelodyneCapture).
  * SPDX-License-Identifier: BSD-3-Clause
  */
 #include <pcl_movers/io/sequence.h>
+#include <pcl_movers/io/velodyne_capture.h>
 #include <pcl_movers/range_image_organizer.h>
 #include <pcl_movers/sensor_model.h>
 
@@ -29,6 +31,8 @@ namespace {
 /** Options and their defaults: the help text is generated from a default-constructed one. */
 struct Options {
   std::string sensor = "auto";
+  std::string pcap;         ///< a Velodyne capture instead of scans
+  std::string calibration;  ///< VeloView/PCL calibration XML for --pcap
   int columns = pcl_movers::RangeImageOrganizer<Point>().getColumns();
   float max_range = pcl_movers::RangeImageOrganizer<Point>().getMaxRange();
   bool overwrite = false;
@@ -40,6 +44,7 @@ void printHelp(const char* argv0) {
   const Options d;
   std::printf(
       "Usage: %s INPUT OUTPUT [options]\n"
+      "       %s --pcap CAPTURE.pcap OUT_FOLDER [--sensor hdl32|vlp16|hdl64] [--calibration XML]\n"
       "  Turns unorganized LiDAR scans into organized clouds (range images): one row per beam,\n"
       "  top to bottom, one column per azimuth step, NaN where no return (pcl_movers::\n"
       "  RangeImageOrganizer). Each point goes to the beam that best explains it, taking the\n"
@@ -50,17 +55,32 @@ void printHelp(const char* argv0) {
       "  velodyne/*.bin). OUTPUT is a folder that receives one <name>.pcd per scan (binary,\n"
       "  fields of the input, VIEWPOINT kept); for a single scan it may also be a .pcd file.\n"
       "  poses.txt, times.txt and objects.txt of a sequence folder are copied along.\n\n"
+      "  With --pcap, reads a Velodyne packet capture (libpcap .pcap, as the sensor sends it or\n"
+      "  pcl_movers_simulate --pcap writes it) through PCL's HDLGrabber/VLPGrabber decoding and\n"
+      "  writes each full sweep (one turn) as OUT_FOLDER/frames/NNNNNN.pcd: organized by the "
+      "laser\n"
+      "  each return came from (rows top to bottom) and its firing azimuth (the sensor's "
+      "columns),\n"
+      "  NaN where a laser gave no return; x forward, y left, z up; intensity = the sensor's\n"
+      "  reflectivity (0-255). times.txt holds each sweep's start from the packets' time stamps.\n"
+      "  The output is a sequence folder every pcl_movers tool reads. Partial turns at the start\n"
+      "  and end of the capture are left out.\n\n"
       "Options:\n"
       "  --sensor S      beam layout: %s (default %s;\n"
       "                  auto estimates it from the first scan and uses it for all, or the\n"
-      "                  preset whose beams it recognizes; hdl64 is KITTI's calibrated HDL-64E)\n"
+      "                  preset whose beams it recognizes; hdl64 is KITTI's calibrated HDL-64E).\n"
+      "                  With --pcap: hdl32, vlp16 or hdl64; auto tells it from the packets'\n"
+      "                  factory byte\n"
+      "  --pcap FILE     read a Velodyne capture instead of scans (see above)\n"
+      "  --calibration XML  with --pcap: VeloView/PCL calibration file (db.xml format), required\n"
+      "                  for hdl64, optional for hdl32 (default PCL's table), refused for vlp16\n"
       "  --columns N     azimuth columns per image (default %d = the sensor's: hdl64 2200,\n"
       "                  hdl32/os1_64 2048, vlp16 1800, ladar2d 360, auto: the beams' firings\n"
       "                  per turn + 2 %%)\n"
       "  --max-range M   leave out points further than M metres (default %g = no limit)\n"
       "  --overwrite     replace an existing output file or non-empty output folder\n"
       "  -h, --help      this help\n",
-      argv0, kSensors, d.sensor.c_str(), d.columns, double(d.max_range));
+      argv0, argv0, kSensors, d.sensor.c_str(), d.columns, double(d.max_range));
 }
 
 using pcl_movers::tools::parseNumber;
@@ -101,14 +121,74 @@ void writeAtomically(const std::string& path, const Cloud& cloud, OutputGuard& g
   guard.created(path);
 }
 
+/** --pcap: the full sweeps of a Velodyne capture → OUT_FOLDER/frames/NNNNNN.pcd + times.txt. */
+int runCapture(const Options& opt, const std::string& output, bool columns_given) {
+  pcl_movers::io::VelodyneModel model;
+  try {
+    model = opt.sensor == "auto" ? pcl_movers::io::detectVelodyneModel(opt.pcap)
+                                 : pcl_movers::io::velodyneModelFromName(opt.sensor);
+  } catch (const InputError& e) {
+    if (opt.sensor == "auto") throw;
+    throw InputError(std::string("--sensor: ") + e.what());
+  }
+  pcl_movers::io::VelodyneCapture capture(opt.pcap, model, opt.calibration);
+  if (columns_given) capture.setColumns(opt.columns);
+  // The first sweep before anything is created: no output for a capture without one.
+  pcl_movers::io::VelodyneSweep sweep;
+  if (!capture.next(sweep)) {
+    if (capture.getPacketCount() == 0)
+      throw InputError(opt.pcap, 0, "no Velodyne data packets (UDP payloads of 1206 bytes)");
+    throw InputError(opt.pcap, 0,
+                     "no full sweep in " + std::to_string(capture.getPacketCount()) +
+                         " data packets (a sweep is one turn between two azimuth wraps)");
+  }
+  const bool existed = fs::exists(output);
+  try {
+    pcl_movers::io::SequenceWriter writer(output, opt.overwrite);
+    std::vector<double> times;
+    std::size_t returns = 0, collisions = 0;
+    const double t0 = sweep.start_time;
+    do {
+      writer.writeFrame(times.size(), *sweep.cloud);
+      times.push_back(sweep.start_time - t0);
+      returns += sweep.returns;
+      collisions += sweep.collisions;
+    } while (capture.next(sweep));
+    writer.writeTimes(times);
+    pcl::console::print_info(
+        "%s (%s): %zu data packets, %zu full sweeps of %d x %d, %.0f returns per sweep, %zu "
+        "returns lost to a nearer one in their cell, %zu partial sweeps left out%s -> %s\n",
+        opt.pcap.c_str(), pcl_movers::io::velodyneModelName(model).c_str(),
+        capture.getPacketCount(), times.size(), capture.getSensorModel().rows(),
+        capture.getColumns(), double(returns) / double(times.size()), collisions,
+        capture.getPartialSweepCount(), capture.isTruncated() ? " (file cut inside a packet)" : "",
+        output.c_str());
+  } catch (...) {
+    std::error_code ec;
+    if (!existed) fs::remove_all(output, ec);
+    throw;
+  }
+  return 0;
+}
+
 int run(int argc, char** argv) {
-  const std::vector<std::string> with_value = {"--sensor", "--columns", "--max-range"};
+  const std::vector<std::string> with_value = {"--sensor", "--columns", "--max-range", "--pcap",
+                                               "--calibration"};
   pcl_movers::tools::checkArguments(argc, argv, {"-h", "--help", "--overwrite"}, with_value);
   const auto positional = pcl_movers::tools::positionalArguments(argc, argv, with_value);
-  if (positional.size() != 2)
+  Options opt;
+  std::string value;
+  if (pcl::console::parse_argument(argc, argv, "--pcap", value) >= 0) opt.pcap = value;
+  if (pcl::console::parse_argument(argc, argv, "--calibration", value) >= 0)
+    opt.calibration = value;
+  if (!opt.calibration.empty() && opt.pcap.empty())
+    throw InputError("--calibration: only with --pcap");
+  if (!opt.pcap.empty() && positional.size() != 1)
+    throw InputError("--pcap " + opt.pcap + ": expected one OUT_FOLDER, got " +
+                     std::to_string(positional.size()) + " argument(s); see -h");
+  if (opt.pcap.empty() && positional.size() != 2)
     throw InputError("expected INPUT and OUTPUT, got " + std::to_string(positional.size()) +
                      " argument(s); see -h");
-  Options opt;
   opt.overwrite = pcl::console::find_switch(argc, argv, "--overwrite");
   std::string v;
   if (pcl::console::parse_argument(argc, argv, "--sensor", v) >= 0) opt.sensor = v;
@@ -122,6 +202,10 @@ int run(int argc, char** argv) {
     opt.max_range = float(parseNumber("--max-range", v));
     if (!(opt.max_range > 0)) throw InputError("--max-range: must be > 0, got '" + v + "'");
   }
+
+  if (!opt.pcap.empty())
+    return runCapture(opt, positional[0],
+                      pcl::console::find_argument(argc, argv, "--columns") >= 0);
 
   pcl_movers::RangeImageOrganizer<Point> organizer;
   if (opt.sensor != "auto") organizer.setSensorModel(pcl_movers::SensorModel::fromName(opt.sensor));

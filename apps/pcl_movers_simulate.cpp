@@ -6,6 +6,8 @@
 #include "tool_utils.h"
 
 #include <pcl_movers/io/sequence.h>
+#include <pcl_movers/io/velodyne_capture.h>
+#include <pcl_movers/sim/capture.h>
 #include <pcl_movers/sim/lidar_simulator.h>
 #include <pcl_movers/sim/scenario.h>
 #include <pcl_movers/sim/scene_families.h>
@@ -16,6 +18,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <iostream>
 #include <string>
 
@@ -29,6 +32,7 @@ struct Options {
   long long seed = -1;      ///< < 0 = the scenario's `seed`
   std::string sensor;       ///< "" = the scenario's `sensor.preset`
   std::string family;       ///< generate the scene of this family instead of reading a file
+  std::string pcap;         ///< also write the scene as a Velodyne packet capture
   bool print_yaml = false;  ///< print the scenario file and stop
   bool overwrite = false;
   bool progress = false;  ///< force the progress bar when stderr is not a terminal
@@ -57,6 +61,12 @@ std::string describe(const Options& d) {
        "                  length (default " +
        std::to_string(pcl_movers::sim::SceneOptions().frames) + ")\n";
   s += "  --print-yaml    print the scenario file (generated or read) to stdout and stop\n";
+  s += "  --pcap FILE     also write the scene as a Velodyne packet capture (libpcap file of the\n"
+       "                  sensor's UDP data packets, one turn per frame; hdl32, vlp16 or hdl64;\n"
+       "                  for hdl64 the calibration XML goes beside it as FILE.xml). Reading it\n"
+       "                  back (pcl_movers_organize --pcap) gives the frames to 2 mm / 0.01 deg\n"
+       "                  (default: " +
+       (d.pcap.empty() ? std::string("none") : d.pcap) + ")\n";
   s += std::string("  --overwrite     replace the sequence in a non-empty OUT_FOLDER (default: ") +
        (d.overwrite ? "on" : "off") + ")\n";
   s +=
@@ -100,7 +110,8 @@ int main(int argc, char** argv) {
       printHelp(argv[0]);
       return 0;
     }
-    const std::vector<std::string> with_value = {"--frames", "--seed", "--sensor", "--family"};
+    const std::vector<std::string> with_value = {"--frames", "--seed", "--sensor", "--family",
+                                                 "--pcap"};
     tools::checkArguments(argc, argv, {"--overwrite", "--progress", "--print-yaml"}, with_value);
     const auto positional = tools::positionalArguments(argc, argv, with_value);
     Options opt;
@@ -110,6 +121,7 @@ int main(int argc, char** argv) {
       if (a == "--seed") opt.seed = parseInteger(a, argv[i + 1], 0, (1LL << 53));
       if (a == "--sensor") opt.sensor = argv[i + 1];
       if (a == "--family") opt.family = argv[i + 1];
+      if (a == "--pcap") opt.pcap = argv[i + 1];
     }
     opt.overwrite = pcl::console::find_switch(argc, argv, "--overwrite");
     opt.progress = pcl::console::find_switch(argc, argv, "--progress");
@@ -145,6 +157,16 @@ int main(int argc, char** argv) {
       return 0;
     }
     pcl_movers::sim::LidarSimulator simulator(scenario);  // validates the sensor name
+    if (!opt.pcap.empty()) {  // refuse before minutes of simulation (writeCapture checks again)
+      try {
+        pcl_movers::io::velodyneModelFromName(simulator.getSensor().name());
+      } catch (const InputError&) {
+        throw InputError("--pcap " + opt.pcap + ": sensor '" + simulator.getSensor().name() +
+                         "' has no Velodyne packet format (hdl32, vlp16, hdl64)");
+      }
+      if (std::filesystem::exists(opt.pcap) && !opt.overwrite)
+        throw InputError(opt.pcap, 0, "exists (use --overwrite to replace it)");
+    }
 
     pcl::console::print_info("Simulating '%s': %d frames, %s, %zu objects, seed %llu → %s\n",
                              scenario.name.c_str(), scenario.frames,
@@ -155,6 +177,15 @@ int main(int argc, char** argv) {
     pcl_movers::sim::writeSequence(simulator, out_folder, opt.overwrite,
                                    [&](std::size_t done, std::size_t) { bar.update(done); });
     bar.finish();
+    if (!opt.pcap.empty()) {
+      pcl_movers::sim::writeCapture(simulator, opt.pcap, opt.overwrite);
+      pcl::console::print_info(
+          "Wrote the capture %s%s\n", opt.pcap.c_str(),
+          simulator.getSensor().name() == "hdl64"
+              ? (" and its calibration " + pcl_movers::sim::captureCalibrationPath(opt.pcap))
+                    .c_str()
+              : "");
+    }
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     pcl::console::print_info("Wrote %d frames in %.1f s (%.1f frames/s, including PCD writing)\n",

@@ -116,7 +116,18 @@ SensorModel SensorModel::hdl64() {
 }
 
 SensorModel SensorModel::hdl32() {
-  return SensorModel(evenlySpaced(10.67f, -30.67f, 32), 2048, -float(M_PI), float(M_PI), "hdl32");
+  // The vertical angles of the HDL-32E user's manual (Velodyne 63-9113, "Laser firing sequence"),
+  // the table VeloView, PCL's HDLGrabber and the ROS velodyne driver decode its packets with (the
+  // sensor does not send them). They are 4/3° apart rounded to 0.01°: an even spacing from
+  // +10.67° to -30.67° differs from them by up to 0.007°, which moves a 100 m return by 1.2 cm.
+  static const float kElevationDeg[32] = {
+      10.67f,  9.33f,   8.f,     6.67f,   5.33f,   4.f,     2.67f,   1.33f,
+      0.f,     -1.33f,  -2.67f,  -4.f,    -5.33f,  -6.67f,  -8.f,    -9.33f,
+      -10.67f, -12.f,   -13.33f, -14.67f, -16.f,   -17.33f, -18.67f, -20.f,
+      -21.33f, -22.67f, -24.f,   -25.33f, -26.67f, -28.f,   -29.33f, -30.67f};
+  std::vector<float> elevations(32);
+  for (int i = 0; i < 32; ++i) elevations[i] = kElevationDeg[i] * kDeg;
+  return SensorModel(std::move(elevations), 2048, -float(M_PI), float(M_PI), "hdl32");
 }
 
 SensorModel SensorModel::vlp16() {

@@ -23,6 +23,7 @@
 #include <pcl_movers/io/sequence.h>
 #include <pcl_movers/io/tracks.h>
 #include <pcl_movers/sensor_model.h>
+#include <pcl_movers/sim/capture.h>
 #include <pcl_movers/sim/lidar_simulator.h>
 #include <pcl_movers/sim/scenario.h>
 
@@ -151,6 +152,12 @@ class BadInputs : public ::testing::Test {
     pcl_movers::sim::LidarSimulator simulator(scenario);
     pcl_movers::sim::writeSequence(simulator, d + "seq_good", false);
     good_frame_ = d + "seq_good/frames/000000.pcd";
+
+    // Velodyne captures: the good sequence as packets, the same cut after 5 packets (no full
+    // sweep; a VLP-16 turn is 75 packets of 1248 bytes after a 16-byte record header), text.
+    pcl_movers::sim::writeCapture(simulator, d + "good.pcap", false);
+    writeFile(d + "short.pcap", readFile(d + "good.pcap").substr(0, 24 + 5 * (16 + 1248)));
+    writeFile(d + "not_a_capture.pcap", "this is a text file, not a packet capture\n");
 
     // Single-file inputs.
     writeFile(d + "empty.pcd", "");
@@ -705,6 +712,46 @@ TEST_F(BadInputs, Organize) {
   check("organize", scanRows("organize", true, "_out"));
 }
 
+TEST_F(BadInputs, OrganizeCapture) {
+  SKIP_UNLESS_BUILT("organize");
+  const std::string o = out("capture_out");
+  auto row = [&](const std::string& name, const std::string& args, Expect e,
+                 std::vector<std::string> keys, const std::string& output = "") {
+    const std::string dst = output.empty() ? o : output;
+    return Row{name, args + " " + quote(dst), e, std::move(keys), dst};
+  };
+  const std::string pcap = "--pcap " + quote(in("good.pcap"));
+  check("organize", {
+                        row("good capture (control)", pcap, Expect::kPass, {}),
+                        row("good capture, sensor given (control)", pcap + " --sensor vlp16",
+                            Expect::kPass, {}),
+                        row("missing capture", "--pcap " + quote(in("missing.pcap")), Expect::kFail,
+                            {"missing.pcap: does not exist"}),
+                        row("not a pcap", "--pcap " + quote(in("not_a_capture.pcap")),
+                            Expect::kFail, {"not_a_capture.pcap: not a pcap"}),
+                        row("a PCD given as capture", "--pcap " + quote(good_frame_), Expect::kFail,
+                            {"000000.pcd: not a pcap"}),
+                        row("no full sweep", "--pcap " + quote(in("short.pcap")), Expect::kFail,
+                            {"short.pcap: no full sweep"}),
+                        row("unknown sensor", pcap + " --sensor hdl999", Expect::kFail,
+                            {"unknown velodyne sensor 'hdl999'"}),
+                        row("wrong sensor", pcap + " --sensor hdl32", Expect::kFail,
+                            {"good.pcap: is a vlp-16 capture"}),
+                        row("hdl64 without calibration", pcap + " --sensor hdl64", Expect::kFail,
+                            {"--calibration"}),
+                        row("missing calibration",
+                            pcap + " --sensor hdl64 --calibration " + quote(in("missing.xml")),
+                            Expect::kFail, {"missing.xml"}),
+                        row("calibration not XML",
+                            pcap + " --sensor hdl64 --calibration " + quote(in("garbage.yaml")),
+                            Expect::kFail, {"garbage.yaml"}),
+                        row("non-empty output folder", pcap, Expect::kFail,
+                            {"not empty", "exists", "--overwrite"}, dir_ + "/existing_out"),
+                        row("output below a regular file", pcap, Expect::kFail,
+                            {"cannot", "not a directory", "a_file"}, in("a_file") + "/capture"),
+                    });
+}
+
 TEST_F(BadInputs, EgoMotion) {
   SKIP_UNLESS_BUILT("ego_motion");
   std::vector<Row> rows = commonRows();
@@ -768,6 +815,24 @@ TEST_F(BadInputs, Simulate) {
                   o});
   rows.push_back(
       {"unknown --family", "--family motorway " + quote(o), Expect::kFail, {"motorway"}, o});
+  rows.push_back(
+      {"--pcap (control)",
+       quote(in("small.yaml")) + " " + quote(o) + " --pcap " + quote(out("sim_capture.pcap")),
+       Expect::kPass,
+       {},
+       o});
+  rows.push_back({"--pcap for a sensor without packets",
+                  quote(in("small.yaml")) + " " + quote(o) + " --sensor os1_64 --pcap " +
+                      quote(out("sim_capture_os1.pcap")),
+                  Expect::kFail,
+                  {"'os1_64' has no velodyne packet format"},
+                  o});
+  rows.push_back(
+      {"--pcap onto an existing file",
+       quote(in("small.yaml")) + " " + quote(o) + " --pcap " + quote(dir_ + "/existing_file.pcd"),
+       Expect::kFail,
+       {"existing_file.pcd: exists"},
+       o});
   rows.push_back({"--family with a scenario file too",
                   "--family urban " + quote(in("small.yaml")) + " " + quote(o),
                   Expect::kFail,

@@ -34,7 +34,8 @@ class SensorModel {
    * points in a cell of their own with RangeImageOrganizer, 2048 only 96.0 %; see
    * docs/benchmarks.md). Fitted on KITTI's 2011-09-26 drives; other KITTI days differ by ~0.01°. */
   static SensorModel hdl64();
-  /** \brief Velodyne HDL-32E: 32 beams, +10.67° to -30.67°, 2048 columns. */
+  /** \brief Velodyne HDL-32E: 32 beams, +10.67° to -30.67° at the manual's vertical angles (4/3°
+   * apart, rounded to 0.01°; PCL's HDLGrabber default table), 2048 columns. */
   static SensorModel hdl32();
   /** \brief Velodyne VLP-16: 16 beams, ±15°, 1800 columns. */
   static SensorModel vlp16();
