@@ -82,6 +82,13 @@ def pct(v):
 def num(v, p=3):
     return "—" if v is None else f"{v:.{p}f}"
 
+print("## De-skewing with per-point times (`--deskew`, off by default)")
+print()
+print("Generated scenes simulated with an instant sweep and with a rolling one (`sensor.sweep: rolling`:")
+print("each azimuth column at its own time, a per-point `time` field); the rolling ones detected with")
+print("de-skewing off and on (`--deskew off|on`); scored all round against boxes at the frame time.")
+print("docs/reliability.md explains why de-skewing costs on fast traffic and is off by default.")
+print()
 print("| scene | ego speed [m/s] | sweep | de-skewing | frames de-skewed | mean hit % | false alarms / frame | velocity RMS [m/s] |")
 print("|---|---:|---|---|---:|---:|---:|---:|")
 for n in names:
