@@ -30,9 +30,9 @@ command -v ccache >/dev/null && LAUNCHER=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
 GENERATOR=()
 command -v ninja >/dev/null && GENERATOR=(-G Ninja)
 
-# PCL/VTK/Boost are not instrumented; ASan still sees every malloc/free of the process. No LSan
-# suppressions are needed (see docs/reliability.md); if a third-party leak ever shows up, add it
-# to scripts/lsan.supp with a comment naming the library and why it is not ours.
+# PCL/VTK/Boost are not instrumented; ASan still sees every malloc/free of the process. Third-party
+# leaks go in scripts/lsan.supp with a comment naming the library and why the leak is not ours
+# (one today: libpcap's handle in PCL's capture thread; see docs/reliability.md).
 export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:strict_string_checks=1:detect_stack_use_after_return=1:check_initialization_order=1"
 export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1"
 if [[ -f "$ROOT/scripts/lsan.supp" ]]; then
@@ -68,12 +68,21 @@ XVFB=()
 if [ -z "${DISPLAY:-}" ] && command -v xvfb-run >/dev/null; then
   XVFB=(xvfb-run -a -s "-screen 0 1280x1024x24")
 fi
-"${XVFB[@]}" "${CTEST[@]}" -E '^ViewerTool\.'
+"${XVFB[@]}" "${CTEST[@]}" -E '^(ViewerTool|BadInputs|VelodyneCapture)\.'
 # The viewer tests run pcl_movers_viewer, which loads the Mesa GL driver under Xvfb. That driver
 # leaves ~112 bytes allocated at exit from a module it has already unloaded (LSan reports
 # "<unknown module>", so no suppression file can name it). Leak detection is therefore off for
 # these four tests only; every ASan memory-error check and UBSan stay on.
 ASAN_OPTIONS="${ASAN_OPTIONS/detect_leaks=1/detect_leaks=0}" "${XVFB[@]}" "${CTEST[@]}" -R '^ViewerTool\.'
+# PCL's Velodyne grabbers (pcl::HDLGrabber::initialize, used to decode captures and for their laser
+# tables) allocate point clouds inside Debian's libpcl_io, built as C++14, where pcl::PointCloud
+# has Eigen's aligned operator new; our C++17 code releases them through shared_ptr with the
+# global operator delete. ASan reports alloc-dealloc-mismatch; on x86-64 glibc both sides are
+# malloc/free (Eigen's aligned malloc is plain malloc there), and nothing on our side can pair
+# them. The tests that construct a grabber (the capture tests, and the bad-input matrix, whose
+# fixture writes a capture) run with that one check off; every other check stays on.
+ASAN_OPTIONS="$ASAN_OPTIONS:alloc_dealloc_mismatch=0" "${XVFB[@]}" "${CTEST[@]}" \
+  -R '^(BadInputs|VelodyneCapture)\.'
 stamp "ctest"
 
 echo "== simulate + detect on data/scenarios/sample.yaml under ASan+UBSan"

@@ -4,6 +4,7 @@
 #include <pcl_movers/io/sequence.h>
 
 #include <pcl/PCLPointCloud2.h>
+#include <pcl/common/io.h>
 #include <pcl/conversions.h>
 #include <pcl/io/pcd_io.h>
 #include <pcl/io/ply_io.h>
@@ -302,6 +303,16 @@ void readBlob(const std::string& path, pcl::PCLPointCloud2& blob, Eigen::Vector4
     if (!hasField(blob, f)) throw InputError(path, 0, std::string("scan has no '") + f + "' field");
   if (blob.data.size() < static_cast<std::size_t>(blob.width) * blob.height * blob.point_step)
     throw InputError(path, 0, "truncated point data");
+  // pcl::fromPCLPointCloud2 copies each field from offset to offset + size within every point: a
+  // header whose field reaches past the point step would read past the data (found by fuzzing).
+  for (const auto& field : blob.fields) {
+    const std::size_t size =
+        pcl::getFieldSize(field.datatype) * std::max<std::size_t>(1, field.count);
+    if (size == 0 || field.offset + size > blob.point_step)
+      throw InputError(path, 0,
+                       "field '" + field.name + "' lies outside the point's " +
+                           std::to_string(blob.point_step) + " bytes");
+  }
 }
 
 /** The blob's points as PointT (intensity 0 when the blob has none). */
