@@ -61,6 +61,38 @@ void FreeSpaceMap::addBlindScan() {
   scans_.emplace_front();
 }
 
+bool FreeSpaceMap::passesOverGround(float sin_elevation) const {
+  return sensor_height_ <= 0 || -sin_elevation * no_return_range_ <= sensor_height_;
+}
+
+void FreeSpaceMap::indexSampledRows(Scan& scan) const {
+  scan.sampled_below.assign(static_cast<std::size_t>(rows_), -1);
+  scan.sampled_above.assign(static_cast<std::size_t>(rows_), rows_);
+  int last = -1;
+  for (int r = 0; r < rows_; ++r) {
+    scan.sampled_below[static_cast<std::size_t>(r)] = last;
+    if (scan.sampled_rows[static_cast<std::size_t>(r)]) last = r;
+  }
+  last = rows_;
+  for (int r = rows_ - 1; r >= 0; --r) {
+    scan.sampled_above[static_cast<std::size_t>(r)] = last;
+    if (scan.sampled_rows[static_cast<std::size_t>(r)]) last = r;
+  }
+}
+
+void FreeSpaceMap::windowRows(const Scan& scan, int row, int& lo, int& hi) const {
+  lo = row - win_rows_;
+  hi = row + win_rows_;
+  if (row >= 0 && row < rows_) {
+    const int below = scan.sampled_below[static_cast<std::size_t>(row)];
+    const int above = scan.sampled_above[static_cast<std::size_t>(row)];
+    if (below >= 0 && row - below <= kMaxBeamGapRows) lo = std::min(lo, below);
+    if (above < rows_ && above - row <= kMaxBeamGapRows) hi = std::max(hi, above);
+  }
+  lo = std::max(lo, 0);
+  hi = std::min(hi, rows_ - 1);
+}
+
 FreeSpaceMap::Evidence FreeSpaceMap::test(const std::vector<Eigen::Vector3f>& world_points,
                                           int frames_ago) const {
   Evidence e;
@@ -76,9 +108,12 @@ FreeSpaceMap::Evidence FreeSpaceMap::test(const std::vector<Eigen::Vector3f>& wo
     const int col = cellCol(detail::fastAtan2Deg(q.y(), q.x()));
     // Nearest return over the window: a ray that passed just beside an edge never counts.
     float nearest = 0.0f;
-    for (int dr = -win_rows_; dr <= win_rows_; ++dr) {
-      const int r = row + dr;
-      if (r < 0 || r >= rows_) continue;
+    int lo = 0, hi = -1;
+    windowRows(s, row, lo, hi);
+    bool beam = false;  // a beam was cast at one of the window's elevations
+    for (int r = lo; r <= hi; ++r) {
+      if (!s.sampled_rows[static_cast<std::size_t>(r)]) continue;
+      beam = true;
       for (int dc = -win_cols_; dc <= win_cols_; ++dc) {
         int c = col + dc;
         c = c >= cols_ ? c - cols_ : (c < 0 ? c + cols_ : c);
@@ -86,9 +121,10 @@ FreeSpaceMap::Evidence FreeSpaceMap::test(const std::vector<Eigen::Vector3f>& wo
         if (v > 0.0f && (nearest == 0.0f || v < nearest)) nearest = v;
       }
     }
-    // Nothing returned around there: unknown, unless the direction points down (see
-    // setNoReturnRange()).
-    if (nearest == 0.0f && q.z() < 0.0f) nearest = static_cast<float>(no_return_range_);
+    // Nothing returned around there: unknown, unless the direction points down and a beam was
+    // cast there (see setNoReturnRange()).
+    if (nearest == 0.0f && q.z() < 0.0f && beam && passesOverGround(q.z() / d))
+      nearest = static_cast<float>(no_return_range_);
     if (nearest == 0.0f) continue;
     ++e.tested;
     const float margin = static_cast<float>(std::max(margin_, margin_per_metre_ * d));

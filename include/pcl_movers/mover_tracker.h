@@ -158,6 +158,8 @@ class MoverTracker {
     double max_length = 0;
     std::deque<char> fast;                ///< speed > mover_speed after each of the last updates
     std::deque<Eigen::Vector3d> history;  ///< (x, y, time) of the last measurements
+    /// (x, y, time) of the measurements of the last slow_window seconds (sustainedMotion()).
+    std::deque<Eigen::Vector3d> long_history;
     /// (x, y, time) of the last registered measurements (manoeuvre_window of them), for the
     /// manoeuvre test of registeredSigma().
     std::deque<Eigen::Vector3d> registered;
@@ -404,12 +406,26 @@ class MoverTracker {
    * points, and the line through the window's positions faster than mover_speed and significantly
    * non-zero. */
   bool wellMeasuredMotion(const Track& track) const;
+  /** \brief The track's positions over the last slow_window seconds lie on a line faster than
+   * slow_speed, beyond their scatter (F-test at confirm_false_rate). */
+  bool sustainedMotion(const Track& track) const;
+  /** \brief Speed votes (mover_votes of the last mover_window updates faster than mover_speed;
+   * all of a full window for a view seen only above what hides it) and a net displacement of at
+   * least displacement_ratio of mover_speed over the window. The votes are waived for
+   * wellMeasuredMotion(). */
+  bool fastMotion(const Track& track, bool seen_standing_only, bool well_measured) const;
 
   /** \brief Free-space evidence of a track: the larger fraction of (a) its current points seen
    * through by the scan `free_space_lag` frames ago and (b) its oldest stored points seen through
    * by the current scan (that view is then dropped, so every vote tests a different view). Sets
    * track.free_space; true when it reaches free_space_min_fraction. */
   bool freeSpaceEvidence(Track& track, const std::vector<Eigen::Vector3f>& points) const;
+  /** \brief Free-space evidence on the time scale of slow motion: the fraction of the track's
+   * current points seen through by the scan free_space_long_lag frames ago (the oldest stored
+   * early in a sequence) reaches free_space_long_min_fraction. A walker at 0.6 m/s has moved
+   * 0.3 m in free_space_lag frames, no more than the margin, so a pass at that lag says little;
+   * over 1.5 s it has moved 0.9 m. Sets track.free_space. */
+  bool slowFreeSpaceEvidence(Track& track, const std::vector<Eigen::Vector3f>& points) const;
 
   void ensurePoints(const PointCloud& cloud, const pcl::PointIndices& indices,
                     Candidate& candidate) const;

@@ -245,6 +245,7 @@ void MoverDetector<PointT>::process(const PointCloudConstPtr& scan,
     free_space_.setHistory(std::max(p.free_space_lag, p.free_space_long_lag) + 1);
     free_space_.setMargin(p.free_space_margin, p.free_space_margin_per_metre);
     free_space_.setNoReturnRange(p.free_space_no_return ? p.max_range : 0.0);
+    free_space_.setSensorHeight(p.sensor_height);
     free_space_.addScan(*organized, pose);
     tracker_.setFreeSpaceMap(&free_space_);
   } else {

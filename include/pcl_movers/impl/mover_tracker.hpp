@@ -291,6 +291,45 @@ bool MoverTracker<PointT>::wellMeasuredMotion(const Track& track) const {
 }
 
 template <typename PointT>
+bool MoverTracker<PointT>::fastMotion(const Track& track, bool seen_standing_only,
+                                      bool well_measured) const {
+  const auto& p = parameters_;
+  int votes = 0;
+  for (const char f : track.fast) votes += f;
+  if (!well_measured && votes < p.mover_votes) return false;
+  // Measured only down to what hides it, a track needs every speed vote of a full window: small
+  // fragments above parked cars in a real street (KITTI city, 20-50 points, 0.1-0.3 m tall)
+  // moved with their centroids' jumps and passed mover_votes of them.
+  if (seen_standing_only &&
+      (static_cast<int>(track.fast.size()) < p.mover_window || votes < p.mover_window))
+    return false;
+  const auto& first = track.history.front();
+  const auto& last = track.history.back();
+  const double elapsed = last.z() - first.z();
+  if (elapsed <= 0) return false;
+  const double displacement = (last.template head<2>() - first.template head<2>()).norm();
+  return displacement >= p.displacement_ratio * p.mover_speed * elapsed;
+}
+
+template <typename PointT>
+bool MoverTracker<PointT>::sustainedMotion(const Track& track) const {
+  const auto& p = parameters_;
+  // Registered positions only (a model exists): the centroids of partial views slide as the view
+  // changes, steadily enough over seconds to look like slow motion (a 0.1 m tall fragment beside
+  // the ego in KITTI city at 0.9 m/s).
+  if (!(p.slow_window > 0) || track.large || !track.model || track.long_history.size() < 8)
+    return false;
+  // The window must be mostly covered: a short run of positions is the fast test's business.
+  const double span = track.long_history.back().z() - track.long_history.front().z();
+  if (span < 0.75 * p.slow_window) return false;
+  const LineFit fit = fitVelocity(track.long_history, p.registration_sigma);
+  if (!fit.valid) return false;
+  const double speed = fit.velocity.norm();
+  return speed > p.slow_speed &&
+         speed >= speedSignificanceRatio(fit.positions, p.confirm_false_rate) * fit.sigma_v;
+}
+
+template <typename PointT>
 typename MoverTracker<PointT>::QuadraticFit MoverTracker<PointT>::fitAcceleration(
     const std::deque<Eigen::Vector3d>& positions, double min_sigma) {
   QuadraticFit fit;
@@ -497,11 +536,21 @@ bool MoverTracker<PointT>::freeSpaceEvidence(Track& track,
     return e.seen_through >= p.free_space_min_points ? e.fraction() : 0.0;
   };
   track.free_space = std::max(score(ahead), score(behind));
-  if (track.free_space < p.free_space_min_fraction && p.free_space_long_lag > p.free_space_lag) {
-    ahead = free_space_map_->test(points, p.free_space_long_lag);
-    if (score(ahead) >= p.free_space_long_min_fraction) track.free_space = score(ahead);
-  }
   return track.free_space >= p.free_space_min_fraction;
+}
+
+template <typename PointT>
+bool MoverTracker<PointT>::slowFreeSpaceEvidence(Track& track,
+                                                 const std::vector<Eigen::Vector3f>& points) const {
+  const auto& p = parameters_;
+  track.free_space = 0;
+  if (!free_space_map_ || p.free_space_lag <= 0) return true;  // test disabled
+  const int lag =
+      std::min(std::max(p.free_space_long_lag, p.free_space_lag), free_space_map_->size() - 1);
+  if (lag < 1) return false;
+  const auto e = free_space_map_->test(points, lag);
+  if (e.seen_through >= p.free_space_min_points) track.free_space = e.fraction();
+  return track.free_space >= p.free_space_long_min_fraction;
 }
 
 template <typename PointT>
@@ -730,8 +779,10 @@ void MoverTracker<PointT>::decideMover(Track& track,
   // newborn track, whose birth cluster is often merged or partial (KITTI 0000: a track born on a
   // merged cluster collected two votes at updates 2-3 and latched as a false alarm).
   bool free_now = false;  // this update's view passed the free-space test
-  if (track.hits >= 3 && !track.fast.empty() && track.fast.back()) {
-    free_now = freeSpaceEvidence(track, points);
+  const bool slow_now = sustainedMotion(track);
+  const bool fast_now = !track.fast.empty() && track.fast.back();
+  if (track.hits >= 3 && (fast_now || slow_now)) {
+    free_now = fast_now ? freeSpaceEvidence(track, points) : slowFreeSpaceEvidence(track, points);
     track.free_votes.push_back(free_now ? 1 : 0);
     while (static_cast<int>(track.free_votes.size()) > p.mover_window) track.free_votes.pop_front();
   }
@@ -756,21 +807,7 @@ void MoverTracker<PointT>::decideMover(Track& track,
   const bool seen_standing_only = track.max_height < p.min_mover_height;
   if (seen_standing_only && (track.max_standing_height < p.min_mover_height || besideMover(track)))
     return;
-  int votes = 0;
-  for (const char f : track.fast) votes += f;
-  if (!well_measured && votes < p.mover_votes) return;
-  // Measured only down to what hides it, a track needs every speed vote of a full window: small
-  // fragments above parked cars in a real street (KITTI city, 20-50 points, 0.1-0.3 m tall)
-  // moved with their centroids' jumps and passed mover_votes of them.
-  if (seen_standing_only &&
-      (static_cast<int>(track.fast.size()) < p.mover_window || votes < p.mover_window))
-    return;
-  const auto& first = track.history.front();
-  const auto& last = track.history.back();
-  const double elapsed = last.z() - first.z();
-  if (elapsed <= 0) return;
-  const double displacement = (last.template head<2>() - first.template head<2>()).norm();
-  if (displacement < p.displacement_ratio * p.mover_speed * elapsed) return;
+  if (!fastMotion(track, seen_standing_only, well_measured) && !slow_now) return;
   // One test can be fooled (a cluster that briefly included something else, a mixed edge);
   // free_space_votes tests with evidence are needed, within the last mover_window tests.
   int free_votes = 0;
@@ -1100,6 +1137,9 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     t.large = cand.features.large;
     t.history.emplace_back(m.measurement.x(), m.measurement.y(), time);
     while (static_cast<int>(t.history.size()) > p.mover_window + 1) t.history.pop_front();
+    t.long_history.emplace_back(m.measurement.x(), m.measurement.y(), time);
+    while (!t.long_history.empty() && t.long_history.front().z() < time - p.slow_window - 1e-6)
+      t.long_history.pop_front();
     // The first run of kUnoccludedFitPositions consecutive unoccluded registered positions.
     bool unoccluded_fit_ready = false;
     if (registered && static_cast<int>(t.unoccluded_positions.size()) < kUnoccludedFitPositions) {
@@ -1193,6 +1233,7 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
       t.fast.assign(1, 0);
       t.history.assign(
           1, Eigen::Vector3d(cand.features.centroid.x(), cand.features.centroid.y(), time));
+      t.long_history = t.history;
     }
     std::vector<Eigen::Vector3f> world_points;
     if (free_space_map_ && p.free_space_lag > 0 && !t.large) {
@@ -1321,6 +1362,7 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     t.fast.push_back(0);
     t.seen_occluded = cand.features.occluded;
     t.history.emplace_back(cand.features.centroid.x(), cand.features.centroid.y(), time);
+    t.long_history = t.history;
     if (use_registration && !t.large && cand.features.height >= 0.5 * p.min_mover_height) {
       ensurePoints(*cloud, clusters[c], cand);
       t.model = makeModel(cand, sensor_origin);
