@@ -246,13 +246,13 @@ void writePointLabels(const std::string& path, const std::vector<bool>& has_retu
 }
 
 /** Points a frame that could not be read declares: a PCD header's WIDTH x HEIGHT, a .bin's size
- * / 16; 0 when unknown. */
+ * / 16; 0 when unknown or implausible (over 50 million: a damaged header allocates nothing). */
 std::size_t declaredPoints(const std::string& path) {
   std::error_code ec;
   const std::string ext = fs::path(path).extension().string();
   if (ext == ".bin") {
     const std::uintmax_t size = fs::file_size(path, ec);
-    return ec ? 0 : static_cast<std::size_t>(size / 16);
+    return ec || size / 16 > 50'000'000 ? 0 : static_cast<std::size_t>(size / 16);
   }
   if (ext != ".pcd") return 0;
   pcl::PCLPointCloud2 header;
@@ -262,7 +262,8 @@ std::size_t declaredPoints(const std::string& path) {
   unsigned int data_at = 0;
   if (pcl::PCDReader().readHeader(path, header, origin, orientation, version, type, data_at) != 0)
     return 0;
-  return static_cast<std::size_t>(header.width) * header.height;
+  const std::size_t n = static_cast<std::size_t>(header.width) * header.height;
+  return n <= 50'000'000 ? n : 0;
 }
 
 /** Rejects infinite coordinates (NaN marks empty cells and is fine). */
