@@ -5,6 +5,7 @@
  * SPDX-License-Identifier: BSD-3-Clause
  */
 #include <pcl_movers/eval/corpus_report.h>
+#include <pcl_movers/eval/mos_metrics.h>
 #include <pcl_movers/io/ground_truth.h>
 #include <pcl_movers/io/sequence.h>
 #include <pcl_movers/io/tracks.h>
@@ -64,9 +65,12 @@ void printHelp(const char* name) {
       "hdl64, hdl32, vlp16, os1_64 or ladar2d (k mod 5), so both splits hold every sensor.\n\n"
       "Writes into OUT (created; reused by later runs):\n"
       "  scenes/FAMILY-SEED/        the sequences with ground truth (simulated once; again when\n"
-      "                             the scene's scenario or its sensor's layout changes; delete\n"
-      "                             them after changing the simulator itself)\n"
-      "  runs/MODE/FAMILY-SEED/     pcl_movers_detect's output (replaced on every run)\n"
+      "                             the scene's scenario, its sensor's layout or the simulator's\n"
+      "                             output version changes; delete them after changing the\n"
+      "                             simulator without raising that version)\n"
+      "  runs/MODE/FAMILY-SEED/     pcl_movers_detect's output with --point-labels (replaced on\n"
+      "                             every run); labels/ scored against the scene's labels/ as\n"
+      "                             SemanticKITTI-MOS: the moving-point IoU\n"
       "  report-SPLIT.md            the report: overall, by family, sensor, class, speed band,\n"
       "                             the worst targets and why they were missed\n"
       "  results-SPLIT.jsonl        one line per run with every target's scores\n\n"
@@ -162,13 +166,15 @@ std::string readFile(const fs::path& path) {
   return text.str();
 }
 
-/** What a cached scene was made from: its scenario file and the beam layout of its sensor (a
- * changed preset makes the scene stale although its scenario file is the same). */
+/** What a cached scene was made from: its scenario file, the beam layout of its sensor (a
+ * changed preset makes the scene stale although its scenario file is the same) and the simulator's
+ * output version (sim::kSimulatorOutputVersion: e.g. a change of the labels). */
 std::string sceneStamp(const pcl_movers::sim::Scenario& scenario) {
   const pcl_movers::SensorModel sensor = pcl_movers::SensorModel::fromName(scenario.sensor.preset);
   std::ostringstream stamp;
-  stamp << pcl_movers::sim::toYaml(scenario) << "# sensor layout: " << sensor.rows() << " x "
-        << sensor.columns() << ", elevations";
+  stamp << pcl_movers::sim::toYaml(scenario)
+        << "# simulator output version: " << pcl_movers::sim::kSimulatorOutputVersion << "\n"
+        << "# sensor layout: " << sensor.rows() << " x " << sensor.columns() << ", elevations";
   stamp.precision(9);
   for (float e : sensor.elevations()) stamp << " " << e;
   stamp << "\n";
@@ -236,8 +242,8 @@ CorpusRun detectAndScore(const Options& opt, const std::string& detect, const Sc
   run.mode = mode;
   run.frames = scenario.frames;
   run.blind_frames = int(scenario.blind_frames.size());
-  std::vector<std::string> args = {detect,   seq.string(), out.string(),
-                                   "--mode", mode,         "--overwrite"};
+  std::vector<std::string> args = {detect, seq.string(),  out.string(),    "--mode",
+                                   mode,   "--overwrite", "--point-labels"};
   for (const auto& w : words(opt.detect_args)) args.push_back(w);
   fs::create_directories(out.parent_path());
   const fs::path log = out.string() + ".log";
@@ -257,6 +263,13 @@ CorpusRun detectAndScore(const Options& opt, const std::string& detect, const Sc
                              : std::vector<pcl_movers::io::TrackRow>();
   run.score =
       pcl_movers::eval::scoreDetections(objects, tracks, params, reader.poses(), reader.times());
+  // Moving-point IoU (SemanticKITTI-MOS); a failed run predicted nothing.
+  if (fs::is_directory(seq / "labels")) {
+    run.mos = pcl_movers::eval::scoreMosFolders((seq / "labels").string(),
+                                                run.ok ? (out / "labels").string() : "")
+                  .total;
+    run.has_mos = true;
+  }
   return run;
 }
 

@@ -5,6 +5,8 @@
 #include <pcl_movers/deskew.h>
 #include <pcl_movers/detector_parameters.h>
 #include <pcl_movers/ego_motion_estimator.h>
+#include <pcl_movers/io/ground_truth.h>
+#include <pcl_movers/io/point_labels.h>
 #include <pcl_movers/io/sequence.h>
 #include <pcl_movers/io/tracks.h>
 #include <pcl_movers/mover_detector.h>
@@ -44,6 +46,7 @@ const std::vector<std::string> kFlags{"-h",
                                       "--help",
                                       "--overwrite",
                                       "--labelled-clouds",
+                                      "--point-labels",
                                       "--estimate-poses",
                                       "--print-config",
                                       "--skip-bad-frames",
@@ -73,7 +76,14 @@ void printHelp(const char* name) {
      << "  labelled/      with --labelled-clouds: one PCD per frame named as its input file,\n"
      << "                 the input's points in its order with its fields, plus label (0\n"
      << "                 unlabelled or not kept, 1 ground, 2 static, 3 mover) and track (or "
-        "-1)\n\n"
+        "-1)\n"
+     << "  labels/        with --point-labels: NAME.label per frame (NAME: the input file's name\n"
+     << "                 without extension, as labelled/), SemanticKITTI-MOS layout: one\n"
+     << "                 little-endian uint32 per input point in the input's order, class in the\n"
+     << "                 low 16 bits (mover points 252 car/van, 258 truck, 254 person, 253\n"
+     << "                 bicyclist or 251 unknown, from the box size; 9 other returns; 0 no\n"
+     << "                 return), the mover's track id in the high 16; all 0 for blind or bad\n"
+     << "                 frames. Score with pcl_movers_eval --mos\n\n"
      << "Options:\n"
      << "  --config FILE      'key = value' lines with any of the parameters below\n"
      << "  --rate HZ          frame rate when SEQ has no times.txt (default 10)\n"
@@ -85,8 +95,10 @@ void printHelp(const char* name) {
      << "  --estimate-poses   estimate the sensor poses from the scans even when SEQ has poses\n"
      << "                     (always done when it has none; SEQ/poses.txt is then not read)\n"
      << "  --labelled-clouds  also write OUT/labelled/<input name>.pcd\n"
+     << "  --point-labels     also write OUT/labels/<input name>.label (moving / static)\n"
      << "  --overwrite        write into a non-empty OUT; removes what an earlier run wrote\n"
-     << "                     there (tracks.csv, tracks.json, summary.json, labelled/*.pcd)\n"
+     << "                     there (tracks.csv, tracks.json, summary.json, labelled/*.pcd,\n"
+     << "                     labels/*.label)\n"
      << "  --skip-bad-frames  a malformed frame (truncated, not a PCD, ...) is warned about,\n"
      << "                     counted in summary.json and treated as blind instead of an error\n"
      << "  --resume           continue the interrupted run in OUT after its last complete frame\n"
@@ -157,6 +169,21 @@ void writeLabelledBlob(const std::string& path, const pcl::PCLPointCloud2& blob)
   if (writer.writeBinary(path, blob) != 0) throw InputError(path, 0, "cannot write labelled cloud");
 }
 
+/** The detector's per-point labels and track ids of a frame in the order of its `n` input points
+ * (through FrameResult::input_indices): class 0 (unlabelled) and track -1 for the points the range
+ * image did not keep. Used by the labelled clouds and the point labels alike. */
+void toInputOrder(const Detector::FrameResult& result, std::size_t n,
+                  std::vector<std::uint32_t>& labels, std::vector<std::int32_t>& tracks) {
+  labels.assign(n, Detector::kUnlabelled);
+  tracks.assign(n, -1);
+  for (std::size_t k = 0; k < result.labels.size(); ++k) {
+    const long j = result.input_indices.empty() ? static_cast<long>(k) : result.input_indices[k];
+    if (j < 0 || static_cast<std::size_t>(j) >= n) continue;
+    labels[static_cast<std::size_t>(j)] = result.labels[k];
+    tracks[static_cast<std::size_t>(j)] = result.track_ids[k];
+  }
+}
+
 /** Labelled cloud: every point of the input file `input`, in its order and with its fields, plus
  * its class and track id (class 0, track -1 for the points the range image did not keep). */
 void writeLabelledCloud(const std::string& path, const std::string& input,
@@ -164,14 +191,9 @@ void writeLabelledCloud(const std::string& path, const std::string& input,
   pcl::PCLPointCloud2 in, out;
   pcl_movers::io::readScanBlob(input, in);
   const std::size_t n = static_cast<std::size_t>(in.width) * in.height;
-  std::vector<std::uint32_t> labels(n, 0);
-  std::vector<std::int32_t> tracks(n, -1);
-  for (std::size_t k = 0; k < result.labels.size(); ++k) {
-    const long j = result.input_indices.empty() ? static_cast<long>(k) : result.input_indices[k];
-    if (j < 0 || static_cast<std::size_t>(j) >= n) continue;
-    labels[static_cast<std::size_t>(j)] = result.labels[k];
-    tracks[static_cast<std::size_t>(j)] = result.track_ids[k];
-  }
+  std::vector<std::uint32_t> labels;
+  std::vector<std::int32_t> tracks;
+  toInputOrder(result, n, labels, tracks);
   addLabelFields(in, out);
   out.data.resize(n * out.point_step);
   for (std::size_t j = 0; j < n; ++j) {
@@ -191,6 +213,57 @@ void writeEmptyLabelledCloud(const std::string& path) {
   out.width = 0;
   out.height = 1;
   writeLabelledBlob(path, out);
+}
+
+/** Per point of `scan` (as read, in the input's order): a return, i.e. finite and not at range 0.
+ */
+std::vector<bool> returnsOf(const pcl::PointCloud<PointT>& scan) {
+  std::vector<bool> has_return(scan.size());
+  for (std::size_t j = 0; j < scan.size(); ++j) {
+    const PointT& p = scan[j];
+    has_return[j] = std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z) &&
+                    (p.x != 0.f || p.y != 0.f || p.z != 0.f);
+  }
+  return has_return;
+}
+
+/** OUT/labels/NAME.label of a frame (--point-labels): `has_return` per input point (empty for a
+ * bad frame: `bad_points` zeros, its header's count or 0), all 0 when the frame is blind. */
+void writePointLabels(const std::string& path, const std::vector<bool>& has_return,
+                      std::size_t bad_points, const Detector::FrameResult& result) {
+  const std::size_t n = has_return.empty() ? bad_points : has_return.size();
+  std::vector<std::uint32_t> out(n, 0);
+  if (!has_return.empty() && !result.blind) {
+    std::vector<std::uint32_t> labels;
+    std::vector<std::int32_t> tracks;
+    toInputOrder(result, n, labels, tracks);
+    std::vector<int> mover_track(n, -1);
+    for (std::size_t j = 0; j < n; ++j)
+      if (labels[j] == Detector::kMover) mover_track[j] = tracks[j];
+    out = pcl_movers::io::movingPointLabels(has_return, mover_track, result.rows);
+  }
+  pcl_movers::io::writeLabels(path, out);
+}
+
+/** Points a frame that could not be read declares: a PCD header's WIDTH x HEIGHT, a .bin's size
+ * / 16; 0 when unknown or implausible (over 50 million: a damaged header allocates nothing). */
+std::size_t declaredPoints(const std::string& path) {
+  std::error_code ec;
+  const std::string ext = fs::path(path).extension().string();
+  if (ext == ".bin") {
+    const std::uintmax_t size = fs::file_size(path, ec);
+    return ec || size / 16 > 50'000'000 ? 0 : static_cast<std::size_t>(size / 16);
+  }
+  if (ext != ".pcd") return 0;
+  pcl::PCLPointCloud2 header;
+  Eigen::Vector4f origin;
+  Eigen::Quaternionf orientation;
+  int version = 0, type = 0;
+  unsigned int data_at = 0;
+  if (pcl::PCDReader().readHeader(path, header, origin, orientation, version, type, data_at) != 0)
+    return 0;
+  const std::size_t n = static_cast<std::size_t>(header.width) * header.height;
+  return n <= 50'000'000 ? n : 0;
 }
 
 /** Rejects infinite coordinates (NaN marks empty cells and is fine). */
@@ -225,6 +298,7 @@ struct Options {
   DetectorParameters params;
   double rate = 10.0;
   bool overwrite = false, labelled = false, force_estimate = false, skip_bad = false;
+  bool point_labels = false;
   bool resume = false;
   long stop_after = -1;  ///< hidden --stop-after-frames N (tests): stop as on SIGINT after N
 };
@@ -288,6 +362,7 @@ bool parseOptions(int argc, char** argv, Options& o) {
   o.out = positional[1];
   o.overwrite = pcl::console::find_switch(argc, argv, "--overwrite");
   o.labelled = pcl::console::find_switch(argc, argv, "--labelled-clouds");
+  o.point_labels = pcl::console::find_switch(argc, argv, "--point-labels");
   o.input.rate_hz = o.rate;
   o.skip_bad = pcl::console::find_switch(argc, argv, "--skip-bad-frames");
   o.resume = pcl::console::find_switch(argc, argv, "--resume");
@@ -314,6 +389,7 @@ std::string runKey(const Options& o, const pcl_movers::io::SequenceReader& reade
       << o.force_estimate << "\nlabelled " << o.labelled << "\nskip_bad " << o.skip_bad
       << "\nposes " << o.input.poses_path << " " << static_cast<int>(o.input.poses_format) << " "
       << o.input.calib_path << "\n";
+  if (o.point_labels) key << "point_labels 1\n";  // absent otherwise: older run keys unchanged
   for (const auto& path : reader.framePaths())
     key << fs::path(path).filename().string() << " " << fs::file_size(path, ec) << "\n";
   key << o.params.toConfig();
@@ -577,10 +653,14 @@ class DetectRun {
   void processFrame(std::size_t i);
   void replayFrame(std::size_t i, const Detector::FrameResult& result);
   void reportSensor(std::size_t i, const pcl::PointCloud<PointT>& scan);
-  void writeLabelled(std::size_t i, const Detector::FrameResult& result, bool readable);
+  template <typename Write>
+  void writeFrameFile(std::size_t i, const std::string& path, Write&& write);
   void clearEarlierOutputs() const;
   std::string labelledPath(std::size_t i) const {
     return o_.out + "/labelled/" + reader_.frameName(i) + ".pcd";
+  }
+  std::string pointLabelsPath(std::size_t i) const {
+    return o_.out + "/labels/" + reader_.frameName(i) + ".label";
   }
 
   const Options& o_;
@@ -594,23 +674,29 @@ class DetectRun {
   std::size_t prev_cursor_ = 0;  ///< next line of prev_ a replayed row must equal
   TracksFile tracks_;
   bool out_existed_ = false, created_labelled_dir_ = false, sensor_reported_ = false;
+  bool created_labels_dir_ = false;
   std::vector<std::string> created_;      ///< files a failure removes
   std::vector<std::string> frames_json_;  ///< tracks.json, one object per frame so far
 };
 
 /** --overwrite: removes what an earlier run of this tool wrote in OUT (tracks.csv, tracks.json,
- * summary.json, labelled/*.pcd, then labelled/ when that leaves it empty) and nothing else. */
+ * summary.json, labelled/*.pcd, labels/*.label, then labelled/ and labels/ when that leaves them
+ * empty) and nothing else. */
 void DetectRun::clearEarlierOutputs() const {
   std::error_code ec;
   for (const char* name : {"tracks.csv", "tracks.json", "summary.json"})
     fs::remove(fs::path(o_.out) / name, ec);
-  const fs::path labelled = fs::path(o_.out) / "labelled";
-  if (!fs::is_directory(labelled, ec)) return;
-  std::vector<fs::path> pcds;
-  for (const auto& e : fs::directory_iterator(labelled, ec))
-    if (e.is_regular_file(ec) && e.path().extension() == ".pcd") pcds.push_back(e.path());
-  for (const auto& f : pcds) fs::remove(f, ec);
-  if (fs::is_empty(labelled, ec)) fs::remove(labelled, ec);
+  for (const auto& [folder, extension] :
+       {std::pair<const char*, const char*>{"labelled", ".pcd"},
+        std::pair<const char*, const char*>{"labels", ".label"}}) {
+    const fs::path dir = fs::path(o_.out) / folder;
+    if (!fs::is_directory(dir, ec)) continue;
+    std::vector<fs::path> files;
+    for (const auto& e : fs::directory_iterator(dir, ec))
+      if (e.is_regular_file(ec) && e.path().extension() == extension) files.push_back(e.path());
+    for (const auto& f : files) fs::remove(f, ec);
+    if (fs::is_empty(dir, ec)) fs::remove(dir, ec);
+  }
 }
 
 void DetectRun::prepare() {
@@ -634,6 +720,11 @@ void DetectRun::prepare() {
     fs::create_directories(labelled_dir);
     created_labelled_dir_ = true;
   }
+  const std::string labels_dir = o_.out + "/labels";
+  if (o_.point_labels && !fs::exists(labels_dir)) {
+    fs::create_directories(labels_dir);
+    created_labels_dir_ = true;
+  }
 }
 
 void DetectRun::cleanUp() {
@@ -641,6 +732,7 @@ void DetectRun::cleanUp() {
   if (o_.resume) tracks_.rollBack();
   for (const auto& f : created_) fs::remove(f, ec);
   if (created_labelled_dir_) fs::remove(o_.out + "/labelled", ec);
+  if (created_labels_dir_) fs::remove(o_.out + "/labels", ec);
   if (!out_existed_) fs::remove(o_.out, ec);  // only removes it when empty
 }
 
@@ -688,17 +780,16 @@ void DetectRun::reportSensor(std::size_t i, const pcl::PointCloud<PointT>& scan)
   print_info("Beam layout %s\n", buf);
 }
 
-void DetectRun::writeLabelled(std::size_t i, const Detector::FrameResult& result, bool readable) {
-  const std::string path = labelledPath(i);
+/** A per-frame file (labelled cloud, point labels) through a temporary name; kept when the run
+ * being resumed wrote it. */
+template <typename Write>
+void DetectRun::writeFrameFile(std::size_t i, const std::string& path, Write&& write) {
   const bool replay = i < prev_.frames_done;
   if (replay && fs::exists(path)) return;  // written by the run being resumed
   if (!o_.resume && fs::exists(path) && !o_.overwrite)
     throw InputError(path, 0, "exists (use --overwrite)");
   created_.push_back(path);
-  if (readable)
-    writeLabelledCloud(path + ".tmp", reader_.framePaths()[i], result);
-  else
-    writeEmptyLabelledCloud(path + ".tmp");
+  write(path + ".tmp");
   fs::rename(path + ".tmp", path);
 }
 
@@ -723,6 +814,8 @@ void DetectRun::replayFrame(std::size_t i, const Detector::FrameResult& result) 
 void DetectRun::processFrame(std::size_t i) {
   pcl::PointCloud<PointT>::Ptr scan(new pcl::PointCloud<PointT>);
   const bool readable = readFrame(i, *scan);
+  std::vector<bool> has_return;  // before de-skewing moves the points
+  if (o_.point_labels && readable) has_return = returnsOf(*scan);
   Eigen::Isometry3d pose = estimate_ ? Eigen::Isometry3d::Identity() : reader_.pose(i);
   double ego_ms = 0;
   if (estimate_) {
@@ -763,7 +856,18 @@ void DetectRun::processFrame(std::size_t i) {
     if (r.mover) st_.mover_ids.insert(r.track_id);
   }
   st_.rows += result.rows.size();
-  if (o_.labelled) writeLabelled(i, result, readable);
+  const std::string& input = reader_.framePaths()[i];
+  if (o_.labelled)
+    writeFrameFile(i, labelledPath(i), [&](const std::string& tmp) {
+      if (readable)
+        writeLabelledCloud(tmp, input, result);
+      else
+        writeEmptyLabelledCloud(tmp);
+    });
+  if (o_.point_labels)
+    writeFrameFile(i, pointLabelsPath(i), [&](const std::string& tmp) {
+      writePointLabels(tmp, has_return, readable ? 0 : declaredPoints(input), result);
+    });
   if (i < prev_.frames_done)
     replayFrame(i, result);
   else

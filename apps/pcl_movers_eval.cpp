@@ -6,6 +6,7 @@
  */
 #include <pcl_movers/eval/detection_metrics.h>
 #include <pcl_movers/eval/kitti_dont_care.h>
+#include <pcl_movers/eval/mos_metrics.h>
 #include <pcl_movers/io/ground_truth.h>
 #include <pcl_movers/io/sequence.h>
 #include <pcl_movers/io/tracks.h>
@@ -54,6 +55,7 @@ void printHelp(const char* argv0) {
   const Options d;
   std::printf(
       "Usage: %s OBJECTS TRACKS [options]\n"
+      "       %s --mos GT_LABELS PRED_LABELS [--json FILE] [--overwrite]\n"
       "  Scores mover detections (tracks.csv of pcl_movers_detect) against ground truth\n"
       "  (objects.txt) with the metrics of DESIGN.md and prints a Markdown table.\n\n"
       "  A target is a ground-truth track with moving = 1, visible in a frame with >= "
@@ -67,6 +69,14 @@ void printHelp(const char* argv0) {
       "  | |v_xy(row)| - speed_mps |.\n"
       "  Extra (not the DESIGN metric, labelled as such): hit %% over only the frames where the\n"
       "  target's speed_mps is >= %g m/s, since a target that stands still is no mover then.\n\n"
+      "  --mos: moving-object segmentation scored as SemanticKITTI-MOS does, on SemanticKITTI\n"
+      "  .label files (class in the low 16 bits): every GT_LABELS/NAME.label against\n"
+      "  PRED_LABELS/NAME.label (pcl_movers_detect --point-labels; a folder holding labels/, e.g.\n"
+      "  a sequence or detect's OUT, stands for that labels/). Moving = classes 251-259, static =\n"
+      "  every other class; points whose ground-truth class is 0 (unlabeled) or 1 (outlier) are\n"
+      "  not scored. Moving IoU = TP / (TP + FP + FN) over all points of all frames (a prediction\n"
+      "  of 0 on a scored point is an FN), static IoU likewise; then per-frame counts. A\n"
+      "  prediction missing for a ground-truth frame, or with another point count, is an error.\n\n"
       "Options:\n"
       "  --sector-deg D   half-width of the scored sector around +x [deg] (default %g; 180 =\n"
       "                   all around)\n"
@@ -92,7 +102,7 @@ void printHelp(const char* argv0) {
       "  --json FILE      write the scores as JSON\n"
       "  --overwrite      replace existing --png/--json files\n"
       "  -h, --help       this help\n",
-      argv0, d.metrics.velocity_half_window, d.metrics.moving_speed, d.metrics.sector_deg,
+      argv0, argv0, d.metrics.velocity_half_window, d.metrics.moving_speed, d.metrics.sector_deg,
       d.metrics.min_points, d.metrics.grow_xy, d.metrics.grow_z, kSequenceLabels, kSequenceCalib,
       d.no_dont_care ? "counted" : "ignored when available", d.title.c_str());
 }
@@ -194,13 +204,47 @@ std::shared_ptr<const pcl_movers::eval::DontCareRegions> loadDontCare(const Opti
   return regions;
 }
 
+/** A labels folder: DIR itself, or DIR/labels when DIR holds no .label file but that folder. */
+std::string labelsFolder(const std::string& dir) {
+  if (!fs::is_directory(dir)) throw InputError(dir + ": no such folder");
+  for (const auto& e : fs::directory_iterator(dir))
+    if (e.path().extension() == ".label") return dir;
+  if (fs::is_directory(fs::path(dir) / "labels")) return (fs::path(dir) / "labels").string();
+  return dir;
+}
+
+/** --mos GT PRED: moving-point IoU of per-point labels. */
+int runMos(int argc, char** argv, const std::vector<std::string>& positional) {
+  if (positional.size() != 2)
+    throw InputError("--mos expects GT_LABELS and PRED_LABELS folders, got " +
+                     std::to_string(positional.size()) + " argument(s); see -h");
+  for (const char* flag :
+       {"--sector-deg", "--min-points", "--grow", "--grow-z", "--frames", "--sequence", "--poses",
+        "--times", "--png", "--title", "--dontcare", "--calib", "--no-dontcare"})
+    if (pcl::console::find_argument(argc, argv, flag) >= 0)
+      throw InputError(std::string(flag) + " is for scoring tracks; --mos takes --json only");
+  std::string json_path;
+  pcl::console::parse_argument(argc, argv, "--json", json_path);
+  checkOutput(json_path, pcl::console::find_switch(argc, argv, "--overwrite"));
+  const std::string truth = labelsFolder(positional[0]), prediction = labelsFolder(positional[1]);
+  const auto score = pcl_movers::eval::scoreMosFolders(truth, prediction);
+  std::cout << "Moving-object segmentation: " << prediction << " against " << truth << "\n\n"
+            << pcl_movers::eval::formatMosMarkdown(score) << std::flush;
+  if (!json_path.empty()) {
+    writeText(json_path, pcl_movers::eval::formatMosJson(score));
+    pcl::console::print_info("wrote %s\n", json_path.c_str());
+  }
+  return 0;
+}
+
 int run(int argc, char** argv) {
   const std::vector<std::string> with_value = {
       "--sector-deg", "--min-points", "--grow",  "--grow-z", "--frames",   "--sequence", "--poses",
       "--times",      "--png",        "--title", "--json",   "--dontcare", "--calib"};
-  pcl_movers::tools::checkArguments(argc, argv, {"-h", "--help", "--overwrite", "--no-dontcare"},
-                                    with_value);
+  pcl_movers::tools::checkArguments(
+      argc, argv, {"-h", "--help", "--overwrite", "--no-dontcare", "--mos"}, with_value);
   const auto positional = pcl_movers::tools::positionalArguments(argc, argv, with_value);
+  if (pcl::console::find_switch(argc, argv, "--mos")) return runMos(argc, argv, positional);
   if (positional.size() != 2)
     throw InputError("expected OBJECTS and TRACKS, got " + std::to_string(positional.size()) +
                      " file argument(s); see -h");

@@ -15,7 +15,10 @@ echo "each with its sensor (seeds 2k-1 and 2k: hdl64, hdl32, vlp16, os1_64, lada
 echo "mounting height of 1.5-2.5 m, noise, dropouts and, in half of them, 1-3 blind frames."
 echo "**Odd seeds are the tune split, even seeds the check split: parameters and rules are chosen on"
 echo "tune only; check is reported and never tuned on.** Scored as docs/design.md defines it, all"
-echo "around (sector ±180°), 150 frames a scene, default detector parameters."
+echo "around (sector ±180°), 150 frames a scene, default detector parameters. *Moving IoU* is the"
+echo "moving-point IoU of \`pcl_movers_detect --point-labels\` against the scenes' point labels, scored"
+echo "as SemanticKITTI-MOS does (\`pcl_movers_eval --mos\`: TP / (TP + FP + FN) over all points; moving"
+echo "= moving in that frame, faster than 0.1 m/s)."
 echo
 cd "$BUILD_DIR"  # the report quotes the command: no host paths in it
 "$CORPUS" corpus --split all 2>corpus.err |

@@ -74,17 +74,33 @@ TEST(CorpusReport, AggregatesByFamilySensorClassAndSpeed) {
       run("urban", 4, "vlp16", "registration", 1, {target(1, "Car", 50, 25, 4, 50, 8)}),
       run("highway", 2, "hdl64", "centroid", 20, {target(1, "Car", 100, 50, 2, 100, 30)}),
   };
+  // Moving points of the registration runs: highway TP 30, FP 10, FN 10 (60 %); urban TP 10,
+  // FN 30 (25 %); pooled TP 40, FP 10, FN 40 (44.4 %). The centroid run was not scored.
+  runs[0].has_mos = runs[1].has_mos = true;
+  runs[0].mos.moving_as_moving = 30;
+  runs[0].mos.static_as_moving = 10;
+  runs[0].mos.moving_as_static = 10;
+  runs[0].mos.static_as_static = 1000;
+  runs[1].mos.moving_as_moving = 10;
+  runs[1].mos.moving_as_none = 30;
   CorpusReportOptions options;
   const std::string report = formatCorpusReport(runs, options);
   // Overall, registration: targets 100 %, 0 %, 50 % → mean 50.0; FA 6 in 200 frames.
-  EXPECT_NE(row(report, "### Overall", "all").find("| 3 | 50.0 | 0.030 |"), std::string::npos)
-      << report;
-  // By family: highway 100 % and 0 % → 50.0, 5 FA / 100 frames; centroid 20 / 100.
-  EXPECT_NE(row(report, "### By family", "highway").find("| 50.0 | 0.050 | 2.0 | 1 |"),
+  EXPECT_NE(row(report, "### Overall", "all").find("| 3 | 50.0 | 0.030 | 44.4 |"),
             std::string::npos)
       << report;
-  EXPECT_NE(row(report, "### By family", "highway").find("| 0.200 |"), std::string::npos);
-  EXPECT_NE(row(report, "### By sensor", "vlp16").find("| 50.0 | 0.010 |"), std::string::npos);
+  EXPECT_NE(report.find("| moving IoU % |"), std::string::npos) << report;
+  // By family: highway 100 % and 0 % → 50.0, 5 FA / 100 frames; centroid 20 / 100.
+  EXPECT_NE(row(report, "### By family", "highway").find("| 50.0 | 0.050 | 60.0 | 2.0 | 1 |"),
+            std::string::npos)
+      << report;
+  EXPECT_NE(row(report, "### By family", "highway").find("| 0.200 | – |"), std::string::npos);
+  EXPECT_NE(row(report, "### By sensor", "vlp16").find("| 50.0 | 0.010 | 25.0 |"),
+            std::string::npos);
+  const std::string json = formatCorpusJson(runs);
+  EXPECT_NE(json.find("\"mos\": {\"tp\": 30, \"fp\": 10, \"fn\": 10, \"moving_iou\": 0.6,"),
+            std::string::npos)
+      << json;
   EXPECT_NE(row(report, "### By class", "Pedestrian").find("| 0.0 |"), std::string::npos);
   EXPECT_NE(row(report, "### By speed band", "> 15 m/s").find("| 100.0 |"), std::string::npos);
   EXPECT_NE(row(report, "### By speed band", "< 1 m/s").find("| 0.0 |"), std::string::npos);

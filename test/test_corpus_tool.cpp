@@ -63,6 +63,11 @@ TEST(CorpusTool, ReportsBothSplitsReusesScenesAndIsDeterministic) {
   EXPECT_TRUE(fs::exists(dir / "a" / "runs" / "centroid" / "parking-2" / "tracks.csv"));
   const std::string first = withoutTimes(readFile(dir / "a" / "results-all.jsonl"));
   EXPECT_NE(first.find("\"scene\": \"parking-2\""), std::string::npos);
+  // Point labels written and scored (moving-point IoU) in the report and the JSON lines.
+  EXPECT_TRUE(
+      fs::exists(dir / "a" / "runs" / "centroid" / "parking-2" / "labels" / "000011.label"));
+  EXPECT_NE(first.find("\"mos\": {\"tp\": "), std::string::npos) << first;
+  EXPECT_NE(report.find("| moving IoU % |", check), std::string::npos) << report;
 
   // Again into the same folder: the scenes are reused, the numbers are the same.
   const auto stamp = fs::last_write_time(dir / "a" / "scenes" / "parking-1" / "objects.txt");
@@ -71,6 +76,18 @@ TEST(CorpusTool, ReportsBothSplitsReusesScenesAndIsDeterministic) {
   EXPECT_EQ(withoutTimes(readFile(dir / "a" / "results-all.jsonl")), first);
   EXPECT_NE(readFile(dir / "a" / "report-all.md").find("(0.0 min of worker time simulating"),
             std::string::npos);
+
+  // A scene cached by an older simulator (another output version in its stamp, e.g. other
+  // labels) is simulated again.
+  const fs::path stamp_file = dir / "a" / "scenes" / "parking-1" / "corpus_stamp.txt";
+  std::string old_stamp = readFile(stamp_file);
+  const std::size_t version = old_stamp.find("# simulator output version: ");
+  ASSERT_NE(version, std::string::npos) << old_stamp;
+  old_stamp.erase(version, old_stamp.find('\n', version) + 1 - version);
+  std::ofstream(stamp_file) << old_stamp;
+  ASSERT_EQ(runCorpus(dir / "a", dir / "a3.log"), 0) << readFile(dir / "a3.log");
+  EXPECT_NE(fs::last_write_time(dir / "a" / "scenes" / "parking-1" / "objects.txt"), stamp);
+  EXPECT_EQ(withoutTimes(readFile(dir / "a" / "results-all.jsonl")), first);
 
   // And into a fresh folder: simulated anew, the same numbers.
   ASSERT_EQ(runCorpus(dir / "b", dir / "b.log"), 0) << readFile(dir / "b.log");

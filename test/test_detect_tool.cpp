@@ -5,6 +5,9 @@
  * and --resume (byte-identical to an uninterrupted run, labelled clouds included).
  * SPDX-License-Identifier: BSD-3-Clause
  */
+#include <pcl_movers/io/ground_truth.h>
+#include <pcl_movers/io/point_labels.h>
+#include <pcl_movers/io/tracks.h>
 #include <pcl_movers/sim/lidar_simulator.h>
 #include <pcl_movers/sim/scenario.h>
 
@@ -19,6 +22,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -56,18 +60,25 @@ struct ToolRun {
   std::string err;
 };
 
-/** Starts the tool with `args` (stderr to `err_path`); returns the child's pid. */
-pid_t start(const std::vector<std::string>& args, const std::string& err_path) {
+/** Starts `tool` with `args` (stderr to `err_path`, stdout to `out_path`); returns its pid. */
+pid_t startTool(const std::string& tool, const std::vector<std::string>& args,
+                const std::string& err_path, const std::string& out_path = "/dev/null") {
   const pid_t pid = fork();
   if (pid == 0) {
-    std::vector<char*> argv{const_cast<char*>("pcl_movers_detect")};
+    std::vector<char*> argv{const_cast<char*>(tool.c_str())};
     for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
     argv.push_back(nullptr);
-    if (!freopen(err_path.c_str(), "w", stderr) || !freopen("/dev/null", "w", stdout)) _exit(126);
-    execv(toolPath().c_str(), argv.data());
+    if (!freopen(err_path.c_str(), "w", stderr) || !freopen(out_path.c_str(), "w", stdout))
+      _exit(126);
+    execv(tool.c_str(), argv.data());
     _exit(127);
   }
   return pid;
+}
+
+/** Starts pcl_movers_detect with `args` (stderr to `err_path`); returns the child's pid. */
+pid_t start(const std::vector<std::string>& args, const std::string& err_path) {
+  return startTool(toolPath(), args, err_path);
 }
 
 ToolRun finish(pid_t pid, const std::string& err_path) {
@@ -120,7 +131,8 @@ class DetectTool : public ::testing::Test {
     pcl_movers::sim::LidarSimulator simulator(scenario);
     pcl_movers::sim::writeSequence(simulator, dir_ + "/seq", false);
     // The reference: an uninterrupted run.
-    const ToolRun r = detect({dir_ + "/seq", dir_ + "/ref", "--labelled-clouds"}, dir_);
+    const ToolRun r =
+        detect({dir_ + "/seq", dir_ + "/ref", "--labelled-clouds", "--point-labels"}, dir_);
     ASSERT_EQ(r.exit_code, 0) << r.err;
     reference_ = readFile(dir_ + "/ref/tracks.csv");
   }
@@ -160,7 +172,9 @@ std::string DetectTool::reference_;
 TEST_F(DetectTool, InterruptThenResumeEqualsUninterruptedRun) {
   ASSERT_GT(std::count(reference_.begin(), reference_.end(), '\n'), 40) << "too few rows";
   const std::string out = dir_ + "/stopped";
-  ToolRun r = detect({dir_ + "/seq", out, "--labelled-clouds", "--stop-after-frames", "12"}, dir_);
+  ToolRun r = detect(
+      {dir_ + "/seq", out, "--labelled-clouds", "--point-labels", "--stop-after-frames", "12"},
+      dir_);
   EXPECT_EQ(r.exit_code, 130) << r.err;
   EXPECT_NE(r.err.find("--resume"), std::string::npos) << r.err;
   const std::string summary = readFile(out + "/summary.json");
@@ -172,20 +186,27 @@ TEST_F(DetectTool, InterruptThenResumeEqualsUninterruptedRun) {
   EXPECT_FALSE(rowsBefore(partial, 1000).empty());
 
   // Another run's folder (other parameters) is refused, and left as it was.
-  r = detect({dir_ + "/seq", out, "--labelled-clouds", "--resume", "--mover_speed", "2.5"}, dir_);
+  r = detect({dir_ + "/seq", out, "--labelled-clouds", "--point-labels", "--resume",
+              "--mover_speed", "2.5"},
+             dir_);
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("different run"), std::string::npos) << r.err;
   EXPECT_EQ(readFile(out + "/tracks.csv"), partial);
 
   r = detect({dir_ + "/seq", out, "--labelled-clouds", "--resume"}, dir_);
+  EXPECT_NE(r.exit_code, 0) << "resumed without the --point-labels of the interrupted run";
+  EXPECT_NE(r.err.find("different run"), std::string::npos) << r.err;
+  r = detect({dir_ + "/seq", out, "--labelled-clouds", "--point-labels", "--resume"}, dir_);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(readFile(out + "/tracks.csv"), reference_);
   expectSameLabelled(out);
+  for (const char* name : {"000000.label", "000011.label", "000012.label", "000029.label"})
+    EXPECT_EQ(readFile(out + "/labels/" + name), readFile(dir_ + "/ref/labels/" + name)) << name;
   const std::string done = readFile(out + "/summary.json");
   EXPECT_NE(done.find("\"interrupted\": false"), std::string::npos) << done;
   EXPECT_EQ(jsonNumber(done, "resumed_from_frame"), 12) << done;
   // A finished run has nothing to resume.
-  r = detect({dir_ + "/seq", out, "--labelled-clouds", "--resume"}, dir_);
+  r = detect({dir_ + "/seq", out, "--labelled-clouds", "--point-labels", "--resume"}, dir_);
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("finished"), std::string::npos) << r.err;
 }
@@ -260,8 +281,20 @@ TEST_F(DetectTool, BlindAndBadFrames) {
   EXPECT_NE(r.err.find("000014.pcd"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir_ + "/blind_strict")) << "a failed run left its output";
 
-  r = detect({seq, dir_ + "/blind", "--skip-bad-frames"}, dir_);
+  r = detect({seq, dir_ + "/blind", "--skip-bad-frames", "--point-labels"}, dir_);
   ASSERT_EQ(r.exit_code, 0) << r.err;
+  // Point labels of blind and bad frames: all 0, as many as the input's points (a bad frame's
+  // header count), none for a frame without points.
+  pcl::PCLPointCloud2 full;
+  ASSERT_EQ(pcl::io::loadPCDFile(dir_ + "/seq/frames/000014.pcd", full), 0);
+  for (const auto& [name, points] : std::vector<std::pair<std::string, std::size_t>>{
+           {"000010", 8}, {"000011", 0}, {"000014", std::size_t(full.width) * full.height}}) {
+    const std::string labels = readFile(dir_ + "/blind/labels/" + name + ".label");
+    EXPECT_EQ(labels.size(), 4 * points) << name;
+    EXPECT_EQ(labels, std::string(4 * points, '\0')) << name << ": not all 0";
+  }
+  EXPECT_NE(readFile(dir_ + "/blind/labels/000015.label"),
+            std::string(4 * std::size_t(full.width) * full.height, '\0'));
   for (const char* name : {"000010.pcd", "000011.pcd", "000014.pcd"})
     EXPECT_NE(r.err.find(name), std::string::npos) << "no warning naming " << name << ":\n"
                                                    << r.err;
@@ -477,11 +510,13 @@ TEST_F(DetectTool, FileNumbersPerPointAlignmentAndTracksJson) {
 TEST_F(DetectTool, OverwriteClearsOnlyItsOwnOutputs) {
   const std::string seq = dir_ + "/seq_ow", out = dir_ + "/out_ow";
   writeNumberedSequence(dir_ + "/seq", seq, 0, 8, seq + "/poses.txt");
-  ToolRun r = detect({seq, out, "--labelled-clouds"}, dir_);
+  ToolRun r = detect({seq, out, "--labelled-clouds", "--point-labels"}, dir_);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   ASSERT_TRUE(fs::exists(out + "/labelled/000007.pcd"));
+  ASSERT_TRUE(fs::exists(out + "/labels/000007.label"));
   writeFile(out + "/notes.txt", "mine\n");
   writeFile(out + "/labelled/readme.txt", "mine too\n");
+  writeFile(out + "/labels/readme.txt", "mine as well\n");
 
   fs::remove(seq + "/000007.pcd");
   fs::remove(seq + "/000006.pcd");
@@ -496,6 +531,9 @@ TEST_F(DetectTool, OverwriteClearsOnlyItsOwnOutputs) {
   EXPECT_EQ(readFile(out + "/labelled/readme.txt"), "mine too\n");
   EXPECT_FALSE(fs::exists(out + "/labelled/000000.pcd")) << "an earlier run's cloud is left";
   EXPECT_FALSE(fs::exists(out + "/labelled/000007.pcd")) << "an earlier run's cloud is left";
+  EXPECT_EQ(readFile(out + "/labels/readme.txt"), "mine as well\n");
+  EXPECT_FALSE(fs::exists(out + "/labels/000000.label")) << "an earlier run's labels are left";
+  EXPECT_FALSE(fs::exists(out + "/labels/000007.label")) << "an earlier run's labels are left";
   EXPECT_NE(readFile(out + "/summary.json").find("\"pose_source\": \"estimated\""),
             std::string::npos);
   EXPECT_EQ(rowsBefore(readFile(out + "/tracks.csv"), 100),
@@ -505,4 +543,182 @@ TEST_F(DetectTool, OverwriteClearsOnlyItsOwnOutputs) {
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find(seq + "/000001.pcd"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("sequence folder"), std::string::npos) << r.err;
+}
+
+// ------------------------------------------------------------------ per-point moving labels (#26)
+namespace {
+
+std::string evalToolPath() {
+  return PCL_MOVERS_BINARY_DIR "/apps/pcl_movers_eval";
+}
+
+/** pcl_movers_eval with `args`; its stdout in `out`. */
+ToolRun evalTool(const std::vector<std::string>& args, const std::string& dir, std::string& out) {
+  const std::string err = dir + "/eval_stderr.txt", stdout_path = dir + "/eval_stdout.txt";
+  const ToolRun r = finish(startTool(evalToolPath(), args, err, stdout_path), err);
+  out = readFile(stdout_path);
+  return r;
+}
+
+/** The rows of tracks.csv by frame and track id. */
+std::map<int, std::map<int, pcl_movers::io::TrackRow>> rowsByFrame(const std::string& path) {
+  std::map<int, std::map<int, pcl_movers::io::TrackRow>> rows;
+  for (const auto& r : pcl_movers::io::readTracks(path)) rows[r.frame][r.track_id] = r;
+  return rows;
+}
+
+/** Checks frame `frame`'s point labels against its labelled cloud (same run) point by point: a
+ * mover point (label 3) has the moving class of its track's box and the track id; any other
+ * return 9; a point without a return (non-finite, or at range 0) 0. Counts mover points and
+ * returns the labelled cloud left unlabelled (0: not kept by the range image or in no tracked
+ * cluster). */
+void checkPointLabels(const std::string& labels_path, const std::string& labelled_path,
+                      const std::map<int, pcl_movers::io::TrackRow>& rows, std::size_t& movers,
+                      std::size_t& unlabelled_returns) {
+  const auto labels = pcl_movers::io::readLabels(labels_path);
+  pcl::PCLPointCloud2 lab;
+  ASSERT_EQ(pcl::io::loadPCDFile(labelled_path, lab), 0);
+  ASSERT_EQ(labels.size(), std::size_t(lab.width) * lab.height) << labels_path;
+  const int x_at = fieldOffset(lab, "x"), label_at = fieldOffset(lab, "label"),
+            track_at = fieldOffset(lab, "track");
+  for (std::size_t j = 0; j < labels.size(); ++j) {
+    const std::uint8_t* d = &lab.data[j * lab.point_step];
+    float xyz[3];
+    std::uint32_t label = 0;
+    std::int32_t track = 0;
+    std::memcpy(xyz, d + x_at, 12);
+    std::memcpy(&label, d + label_at, 4);
+    std::memcpy(&track, d + track_at, 4);
+    const bool has_return = std::isfinite(xyz[0]) && std::isfinite(xyz[1]) &&
+                            std::isfinite(xyz[2]) && (xyz[0] || xyz[1] || xyz[2]);
+    const std::uint16_t cls = pcl_movers::io::labelClass(labels[j]);
+    const std::uint16_t instance = pcl_movers::io::labelInstance(labels[j]);
+    if (!has_return) {
+      ASSERT_EQ(labels[j], 0u) << labels_path << " point " << j << ": no return";
+    } else if (label == 3) {
+      ASSERT_TRUE(rows.count(track)) << labels_path << " point " << j << ": track " << track;
+      const auto& row = rows.at(track);
+      ASSERT_TRUE(row.mover);
+      ASSERT_EQ(cls, pcl_movers::io::moverClassFromBox(row.length, row.width, row.height))
+          << labels_path << " point " << j;
+      ASSERT_EQ(instance, std::uint16_t(track)) << labels_path << " point " << j;
+      ++movers;
+    } else {
+      ASSERT_EQ(labels[j], 9u) << labels_path << " point " << j << ": label " << label;
+      unlabelled_returns += label == 0;
+    }
+  }
+}
+
+}  // namespace
+
+// Organized input (the simulator's, as its labels/ is): OUT/labels/NAME.label has a label per cell
+// in row-major order, 0 exactly where the simulator has none (no return); mover points carry their
+// class and track; pcl_movers_eval --mos scores them, and names a mismatched or missing file.
+TEST_F(DetectTool, PointLabelsOrganizedAndMosEval) {
+  const auto rows = rowsByFrame(dir_ + "/ref/tracks.csv");
+  std::size_t movers = 0, unlabelled = 0;
+  for (int k = 0; k < 30; ++k) {
+    char name[16];
+    std::snprintf(name, sizeof(name), "%06d", k);
+    const auto truth = pcl_movers::io::readLabels(dir_ + "/seq/labels/" + name + ".label");
+    const auto labels = pcl_movers::io::readLabels(dir_ + "/ref/labels/" + name + ".label");
+    ASSERT_EQ(labels.size(), truth.size()) << name;
+    for (std::size_t j = 0; j < truth.size(); ++j)
+      ASSERT_EQ(labels[j] == 0, truth[j] == 0) << name << " point " << j;
+    const auto it = rows.find(k);
+    checkPointLabels(dir_ + "/ref/labels/" + name + ".label",
+                     dir_ + "/ref/labelled/" + name + ".pcd",
+                     it == rows.end() ? std::map<int, pcl_movers::io::TrackRow>() : it->second,
+                     movers, unlabelled);
+  }
+  EXPECT_GT(movers, 200u) << "too few mover points";
+
+  if (!fs::exists(evalToolPath())) GTEST_SKIP() << evalToolPath() << " is not built";
+  std::string out;
+  ToolRun r = evalTool({"--mos", dir_ + "/seq", dir_ + "/ref"}, dir_, out);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(out.find("| moving | "), std::string::npos) << out;
+  EXPECT_NE(out.find("30 frames"), std::string::npos) << out;
+  // The moving car and the walking person are found in part at least.
+  EXPECT_EQ(out.find("| moving | 0.0 |"), std::string::npos) << out;
+
+  const std::string pred = dir_ + "/mos_pred";
+  fs::copy(dir_ + "/ref/labels", pred);
+  const std::string third = readFile(pred + "/000003.label");
+  writeFile(pred + "/000003.label", third.substr(0, third.size() - 4));
+  r = evalTool({"--mos", dir_ + "/seq/labels", pred}, dir_, out);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find(pred + "/000003.label"), std::string::npos) << r.err;
+  fs::remove(pred + "/000003.label");
+  r = evalTool({"--mos", dir_ + "/seq/labels", pred}, dir_, out);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find(pred + "/000003.label"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("missing"), std::string::npos) << r.err;
+}
+
+// Unorganized input with a NaN point, a point at range 0, one very near and duplicated points
+// (twice in one range-image cell: the range image keeps one): a label per input point in the
+// input's order; the points the range image did not keep are 9 (return) or 0 (none).
+TEST_F(DetectTool, PointLabelsUnorganized) {
+  const std::string seq = dir_ + "/seq_unorg", out = dir_ + "/out_unorg";
+  fs::create_directories(seq);
+  std::istringstream poses(readFile(dir_ + "/seq/poses.txt")),
+      times(readFile(dir_ + "/seq/times.txt"));
+  std::string poses_text, times_text, line;
+  for (int k = 0; k < 10 && std::getline(poses, line); ++k) poses_text += line + "\n";
+  for (int k = 0; k < 10 && std::getline(times, line); ++k) times_text += line + "\n";
+  writeFile(seq + "/poses.txt", poses_text);
+  writeFile(seq + "/times.txt", times_text);
+  std::vector<std::size_t> sizes;
+  for (int k = 0; k < 10; ++k) {
+    char name[32];
+    std::snprintf(name, sizeof(name), "%06d.pcd", k);
+    pcl::PointCloud<pcl::PointXYZI> in, cloud;
+    ASSERT_EQ(pcl::io::loadPCDFile(dir_ + "/seq/frames/" + name, in), 0);
+    pcl::PointXYZI p;
+    p.x = p.y = p.z = std::numeric_limits<float>::quiet_NaN();
+    p.intensity = 0;
+    cloud.push_back(p);  // 0: no return
+    p.x = p.y = p.z = 0;
+    cloud.push_back(p);  // 1: range 0, no return
+    p.x = 0.3f, p.y = 0.1f, p.z = 0.05f;
+    cloud.push_back(p);  // 2: a return nearer than the range image keeps
+    std::size_t finite = 0;
+    for (const auto& q : in) {
+      if (!std::isfinite(q.x)) continue;
+      cloud.push_back(q);
+      if (++finite % 5 == 0) {  // its twin, 2 cm further along the same ray
+        pcl::PointXYZI t = q;
+        const float s = 1.f + 0.02f / std::sqrt(q.x * q.x + q.y * q.y + q.z * q.z);
+        t.x *= s, t.y *= s, t.z *= s;
+        cloud.push_back(t);
+      }
+    }
+    cloud.width = static_cast<std::uint32_t>(cloud.size());
+    cloud.height = 1;
+    cloud.is_dense = false;
+    sizes.push_back(cloud.size());
+    ASSERT_EQ(pcl::io::savePCDFileBinary(seq + "/" + name, cloud), 0);
+  }
+  const ToolRun r =
+      detect({seq, out, "--labelled-clouds", "--point-labels", "--sensor", "vlp16"}, dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto rows = rowsByFrame(out + "/tracks.csv");
+  std::size_t movers = 0, unlabelled = 0;
+  for (int k = 0; k < 10; ++k) {
+    char name[16];
+    std::snprintf(name, sizeof(name), "%06d", k);
+    const auto labels = pcl_movers::io::readLabels(out + "/labels/" + name + ".label");
+    ASSERT_EQ(labels.size(), sizes[k]) << name;
+    EXPECT_EQ(labels[0], 0u) << name;
+    EXPECT_EQ(labels[1], 0u) << name;
+    EXPECT_EQ(labels[2], 9u) << name;
+    const auto it = rows.find(k);
+    checkPointLabels(out + "/labels/" + name + ".label", out + "/labelled/" + name + ".pcd",
+                     it == rows.end() ? std::map<int, pcl_movers::io::TrackRow>() : it->second,
+                     movers, unlabelled);
+  }
+  EXPECT_GT(movers, 50u) << "too few mover points";
+  EXPECT_GT(unlabelled, 10u * sizes[0] / 12) << "the twins the range image dropped are not 9";
 }

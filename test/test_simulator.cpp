@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <set>
 #include <sstream>
 
 namespace fs = std::filesystem;
@@ -279,6 +280,42 @@ TEST(LidarSimulator, LabelsAgreeWithObjectsOnTheSample) {
   EXPECT_EQ(findObject(fr, 3)->type, "Pedestrian");
   EXPECT_FALSE(findObject(fr, 4)->moving);
   EXPECT_FALSE(findObject(fr, 5)->moving);
+}
+
+// MOS ground truth: an object's points have a moving class only in the frames where it moves
+// (> io::semantic::kMovingLabelSpeed); a mover that stops, a parked car and a standing person keep
+// their static classes, whatever the track's `moving` flag.
+TEST(LidarSimulator, MovingLabelsOnlyWhileMoving) {
+  Scenario sc = emptyScene();
+  sc.frames = 60;
+  ObjectSpec car = staticObject("car", 10.0, 6.0, 0);
+  car.mover = true;
+  car.trajectory.speed = 4.0;
+  car.trajectory.segments = {{2.0, 0.0, 0.0}, {1.0, 0.0, 0.0}, {2.0, 4.0, 0.0}};  // stop and go
+  sc.objects.push_back(car);
+  sc.objects.push_back(staticObject("car", 12.0, -6.0, 0));  // parked
+  ObjectSpec person = staticObject("person", 8.0, 3.0, 90);  // a mover standing still
+  person.mover = true;
+  sc.objects.push_back(person);
+  LidarSimulator sim(sc);
+  int moving_frames = 0, standing_frames = 0;
+  for (int f = 0; f < sc.frames; f += 2) {
+    const Frame fr = simulate(sim, f);
+    const io::GroundTruthObject* o = findObject(fr, 1);
+    ASSERT_NE(o, nullptr);
+    const bool moves = o->speed > io::semantic::kMovingLabelSpeed;
+    (moves ? moving_frames : standing_frames) += 1;
+    std::map<int, std::set<int>> classes;  // track -> classes of its points
+    for (const std::uint32_t l : fr.labels)
+      if (io::labelInstance(l) > 0) classes[io::labelInstance(l)].insert(io::labelClass(l));
+    ASSERT_FALSE(classes[1].empty()) << "frame " << f;
+    EXPECT_EQ(classes[1], std::set<int>{moves ? io::semantic::kMovingCar : io::semantic::kCar})
+        << "frame " << f << ", speed " << o->speed;
+    EXPECT_EQ(classes[2], std::set<int>{io::semantic::kCar}) << "frame " << f;
+    EXPECT_EQ(classes[3], std::set<int>{io::semantic::kPerson}) << "frame " << f;
+  }
+  EXPECT_GT(moving_frames, 5);
+  EXPECT_GT(standing_frames, 2);
 }
 
 TEST(LidarSimulator, MoversAndEgoFollowTheirTrajectories) {

@@ -28,6 +28,8 @@ struct Tally {
   int frames = 0;
   int false_alarms = 0;
   bool has_false_alarms = false;  ///< false for groups of targets (class, speed band)
+  MosCounts mos;                  ///< moving-point counts of the group's runs
+  bool has_mos = false;
 
   void addTarget(const TargetScore& t) {
     ++targets;
@@ -44,7 +46,12 @@ struct Tally {
     frames += run.frames;
     false_alarms += run.score.false_alarms;
     has_false_alarms = true;
+    if (run.has_mos) {
+      mos += run.mos;
+      has_mos = true;
+    }
   }
+  double movingIouPercent() const { return has_mos ? 100.0 * mos.movingIou() : NAN; }
   double hitPercent() const { return targets > 0 ? 100.0 * hit_sum / targets : NAN; }
   double medianDelay() const {
     if (delays.empty()) return NAN;
@@ -106,13 +113,14 @@ std::string groupTable(const std::vector<CorpusRun>& runs, const std::string& he
   out << "| " << heading << " | scenes | targets";
   for (std::size_t m = 0; m < modes.size(); ++m) {
     const std::string p = m == 0 ? "" : modes[m] + ": ";
-    out << " | " << p << "hit %" << (run_key ? " | " + p + "FA / frame" : "");
+    out << " | " << p << "hit %"
+        << (run_key ? " | " + p + "FA / frame | " + p + "moving IoU %" : "");
     if (m == 0) out << " | median delay | never hit";
     out << " | " << p << "vel. RMS [m/s]";
   }
   out << " |\n|---|---:|---:";
   for (std::size_t m = 0; m < modes.size(); ++m)
-    out << "|---:" << (run_key ? "|---:" : "") << (m == 0 ? "|---:|---:" : "") << "|---:";
+    out << "|---:" << (run_key ? "|---:|---:" : "") << (m == 0 ? "|---:|---:" : "") << "|---:";
   out << "|\n";
   for (const std::string& k : keys) {
     const auto& by_mode = tallies[k];
@@ -122,7 +130,9 @@ std::string groupTable(const std::vector<CorpusRun>& runs, const std::string& he
       const auto it = by_mode.find(modes[m]);
       const Tally t = it == by_mode.end() ? Tally() : it->second;
       out << " | " << fixed(t.hitPercent(), 1);
-      if (run_key) out << " | " << fixed(t.falseAlarmsPerFrame(), 3);
+      if (run_key)
+        out << " | " << fixed(t.falseAlarmsPerFrame(), 3) << " | "
+            << fixed(t.movingIouPercent(), 1);
       if (m == 0) out << " | " << fixed(t.medianDelay(), 1) << " | " << t.never_detected;
       out << " | " << fixed(t.velocityRms(), 3);
     }
@@ -231,7 +241,10 @@ std::string formatCorpusReport(const std::vector<CorpusRun>& runs,
       << " min of worker time simulating scenes that were not cached).\n\n"
       << "Hit % is the mean over targets of each target's hits / visible frames; FA / frame the "
          "false alarms over all frames; median delay over targets hit at least once; vel. RMS "
-         "pooled over hits. The first mode's columns come first; the others are prefixed.\n\n";
+         "pooled over hits. Moving IoU is the moving-point IoU of pcl_movers_detect "
+         "--point-labels against the scenes' point labels, scored as SemanticKITTI-MOS does: "
+         "TP / (TP + FP + FN) over every point of the group's frames (moving = moving in that "
+         "frame). The first mode's columns come first; the others are prefixed.\n\n";
 
   const RunKey all = [](const CorpusRun&) { return std::string("all"); };
   const TargetKey all_t = [](const CorpusRun&, const TargetScore&) { return std::string("all"); };
@@ -281,7 +294,12 @@ std::string formatCorpusJson(const std::vector<CorpusRun>& runs) {
         << ", \"mode\": " << jsonString(r.mode) << ", \"ok\": " << (r.ok ? "true" : "false")
         << ", \"error\": " << jsonString(r.error) << ", \"frames\": " << r.frames
         << ", \"blind_frames\": " << r.blind_frames << ", \"seconds\": " << jsonNumber(r.seconds)
-        << ", \"false_alarms\": " << r.score.false_alarms << ", \"targets\": [";
+        << ", \"false_alarms\": " << r.score.false_alarms;
+    if (r.has_mos)
+      out << ", \"mos\": {\"tp\": " << r.mos.tp() << ", \"fp\": " << r.mos.fp()
+          << ", \"fn\": " << r.mos.fn() << ", \"moving_iou\": " << jsonNumber(r.mos.movingIou())
+          << ", \"static_iou\": " << jsonNumber(r.mos.staticIou()) << "}";
+    out << ", \"targets\": [";
     bool first = true;
     for (const TargetScore& t : r.score.targets) {
       if (!visible(t)) continue;

@@ -947,7 +947,10 @@ void LidarSimulator::simulate(int frame, pcl::PointCloud<pcl::PointXYZI>& cloud,
         labels[k] = io::makeLabel(best_cls, 0);
       } else {
         FrameObject& fo = fl[best_obj];
-        const std::uint16_t cls = fo.obj->moving ? movingClass(best_cls, fo.obj->type) : best_cls;
+        // Moving classes only while the object moves in this frame (MOS ground truth): a parked
+        // car, a standing person or a car waiting at a light keeps its static class.
+        const std::uint16_t cls =
+            fo.speed > sem::kMovingLabelSpeed ? movingClass(best_cls, fo.obj->type) : best_cls;
         labels[k] = io::makeLabel(cls, std::uint16_t(fo.obj->track_id));
         ++fo.n_points;
       }

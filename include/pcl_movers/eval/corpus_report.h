@@ -4,6 +4,7 @@
 #pragma once
 
 #include <pcl_movers/eval/detection_metrics.h>
+#include <pcl_movers/eval/mos_metrics.h>
 
 #include <cstdint>
 #include <string>
@@ -25,6 +26,10 @@ struct CorpusRun {
   std::string error;   ///< its last error line when !ok
   double seconds = 0;  ///< wall time of the detection
   DetectionScore score;
+  /** Per-point moving labels (pcl_movers_detect --point-labels) scored against the scene's
+   * labels as SemanticKITTI-MOS does (scoreMosFolders()); has_mos false when not scored. */
+  MosCounts mos;
+  bool has_mos = false;
   std::string scene() const { return family + "-" + std::to_string(seed); }
 };
 

@@ -54,6 +54,13 @@ constexpr std::uint16_t kUnlabeled = 0, kOutlier = 1, kCar = 10, kBicycle = 11, 
                         kParking = 44, kSidewalk = 48, kOtherGround = 49, kBuilding = 50,
                         kFence = 51, kVegetation = 70, kTrunk = 71, kTerrain = 72, kPole = 80,
                         kTrafficSign = 81, kMovingCar = 252, kMovingPerson = 254;
+/** \brief The simulator labels an object's points with a moving class (252 moving-car, 253
+ * moving-bicyclist, 254 moving-person, 258 moving-truck) only in the frames where its world speed
+ * exceeds this [m/s], as SemanticKITTI-MOS's ground truth: moving = moving in that frame. Parked
+ * cars, standing people and movers while they stop keep their static class (10, 30, ...). (The
+ * objects.txt flag `moving` is per track: its median speed > 0.5 m/s.) Label version 2; version 1
+ * labelled every frame of a track by that flag. */
+constexpr double kMovingLabelSpeed = 0.1;
 /** \brief road, parking, sidewalk, other-ground, terrain. */
 inline bool isGround(std::uint16_t c) {
   return c == kRoad || c == kParking || c == kSidewalk || c == kOtherGround || c == kTerrain;

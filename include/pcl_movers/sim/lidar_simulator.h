@@ -20,6 +20,12 @@
 namespace pcl_movers {
 namespace sim {
 
+/** \brief Version of what the simulator writes for the same scenario (scans, labels, objects.txt).
+ * Raise it with every change to that output, so that caches of simulated scenes (the corpus's
+ * corpus_stamp.txt) are simulated again. 2: moving label classes only while the object moves
+ * (io::semantic::kMovingLabelSpeed). */
+constexpr int kSimulatorOutputVersion = 2;
+
 /** \brief Ray-casts a Scenario into organized scans with point-wise and object ground truth.
  *
  * Every beam (row) and azimuth step (column) of the SensorModel is one ray from the sensor on the
