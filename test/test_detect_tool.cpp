@@ -31,21 +31,14 @@
 #include <thread>
 #include <vector>
 
+#include "test_util.h"
+
 namespace fs = std::filesystem;
 
 namespace {
 
-std::string readFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-void writeFile(const std::string& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out << text;
-}
+using test_util::readFile;
+using test_util::writeFile;
 
 std::string toolPath() {
   return PCL_MOVERS_BINARY_DIR "/apps/pcl_movers_detect";
