@@ -38,11 +38,11 @@ std::string kebab(std::string key) {
 /** The options a help text lists: "--name" at the start of an (indented) line. */
 std::set<std::string> helpOptions(const std::string& help) {
   std::set<std::string> options;
-  const std::regex line("^ {2,}(--[a-z0-9-]+)");
+  const std::regex line("(^|\n) {2,}(--[a-z0-9-]+)");
   for (std::sregex_iterator it(help.begin(), help.end(), line, std::regex_constants::match_default),
        end;
        it != end; ++it)
-    options.insert((*it)[1]);
+    options.insert((*it)[2]);
   return options;
 }
 
