@@ -52,8 +52,26 @@ struct Options {
   std::string title;        ///< "" = "Scene corpus, <split> split"
 };
 
-void printHelp(const char* name) {
+pcl_movers::tools::OptionTable optionTable() {
   const Options d;
+  const int scenes = d.seeds * int(pcl_movers::sim::sceneFamilies().size());
+  return pcl_movers::tools::OptionTable(
+      {{"--split", "NAME", "tune, check or all", d.split},
+       {"--seeds", "N", "seeds per family, 1..N",
+        std::to_string(d.seeds) + ": " + std::to_string(scenes) + " scenes in all"},
+       {"--families", "A,B", "only these families", "all"},
+       {"--frames", "N", "frames per scene", std::to_string(d.frames)},
+       {"--modes", "A,B", "tracker modes, --mode of pcl_movers_detect", d.modes},
+       {"--jobs", "N", "scenes in parallel", "the number of cores"},
+       {"--detect", "PATH", "the pcl_movers_detect to run", "the one beside this tool"},
+       {"--detect-args", "\"..\"", "extra arguments for every detection, e.g. \"--config my.cfg\""},
+       {"--report", "FILE", "the report's path", "OUT/report-SPLIT.md"},
+       {"--title", "TEXT",
+        "the report's heading; with --split all the check split's report\ncomes first",
+        "\"Scene corpus, SPLIT split\""}});
+}
+
+void printHelp(const char* name) {
   std::string families;
   for (const auto& f : pcl_movers::sim::sceneFamilies())
     families += (families.empty() ? "" : ", ") + f;
@@ -74,21 +92,8 @@ void printHelp(const char* name) {
       "  report-SPLIT.md            the report: overall, by family, sensor, class, speed band,\n"
       "                             the worst targets and why they were missed\n"
       "  results-SPLIT.jsonl        one line per run with every target's scores\n\n"
-      "Options:\n"
-      "  --split NAME        tune, check or all (default %s)\n"
-      "  --seeds N           seeds per family, 1..N (default %d: %d scenes in all)\n"
-      "  --families A,B      only these families (default: all)\n"
-      "  --frames N          frames per scene (default %d)\n"
-      "  --modes A,B         tracker modes, --mode of pcl_movers_detect (default %s)\n"
-      "  --jobs N            scenes in parallel (default: the number of cores)\n"
-      "  --detect PATH       the pcl_movers_detect to run (default: the one beside this tool)\n"
-      "  --detect-args \"..\"  extra arguments for every detection, e.g. \"--config my.cfg\"\n"
-      "  --report FILE       the report's path (default OUT/report-SPLIT.md)\n"
-      "  --title TEXT        the report's heading (default \"Scene corpus, SPLIT split\");\n"
-      "                      with --split all the check split's report comes first\n"
-      "  -h, --help          this help\n",
-      name, families.c_str(), d.split.c_str(), d.seeds,
-      d.seeds * int(pcl_movers::sim::sceneFamilies().size()), d.frames, d.modes.c_str());
+      "Options (-h, --help: this help):\n%s",
+      name, families.c_str(), optionTable().help().c_str());
 }
 
 std::vector<std::string> splitList(const std::string& text) {
@@ -115,24 +120,21 @@ int parseCount(const std::string& flag, const std::string& text, int lo, int hi)
   return int(v);
 }
 
-Options parseOptions(int argc, char** argv) {
+Options parseOptions(const pcl_movers::tools::Arguments& args) {
   Options opt;
   std::string v;
-  if (pcl::console::parse_argument(argc, argv, "--split", opt.split) >= 0 && opt.split != "tune" &&
-      opt.split != "check" && opt.split != "all")
+  if (args.get("--split", opt.split) && opt.split != "tune" && opt.split != "check" &&
+      opt.split != "all")
     throw InputError("--split: expected tune, check or all, got '" + opt.split + "'");
-  if (pcl::console::parse_argument(argc, argv, "--seeds", v) >= 0)
-    opt.seeds = parseCount("--seeds", v, 1, 100000);
-  if (pcl::console::parse_argument(argc, argv, "--frames", v) >= 0)
-    opt.frames = parseCount("--frames", v, 1, 1000000);
-  if (pcl::console::parse_argument(argc, argv, "--jobs", v) >= 0)
-    opt.jobs = parseCount("--jobs", v, 1, 1024);
-  pcl::console::parse_argument(argc, argv, "--families", opt.families);
-  pcl::console::parse_argument(argc, argv, "--modes", opt.modes);
-  pcl::console::parse_argument(argc, argv, "--detect", opt.detect);
-  pcl::console::parse_argument(argc, argv, "--detect-args", opt.detect_args);
-  pcl::console::parse_argument(argc, argv, "--report", opt.report);
-  pcl::console::parse_argument(argc, argv, "--title", opt.title);
+  if (args.get("--seeds", v)) opt.seeds = parseCount("--seeds", v, 1, 100000);
+  if (args.get("--frames", v)) opt.frames = parseCount("--frames", v, 1, 1000000);
+  if (args.get("--jobs", v)) opt.jobs = parseCount("--jobs", v, 1, 1024);
+  args.get("--families", opt.families);
+  args.get("--modes", opt.modes);
+  args.get("--detect", opt.detect);
+  args.get("--detect-args", opt.detect_args);
+  args.get("--report", opt.report);
+  args.get("--title", opt.title);
   for (const auto& f : splitList(opt.families)) pcl_movers::sim::generateScene(f, 1, {1, 10.0});
   for (const auto& m : splitList(opt.modes))
     if (m != "registration" && m != "centroid")
@@ -293,15 +295,12 @@ void writeText(const fs::path& path, const std::string& text) {
 }
 
 int run(int argc, char** argv) {
-  const std::vector<std::string> with_value = {"--split",  "--seeds", "--families", "--frames",
-                                               "--modes",  "--jobs",  "--detect",   "--detect-args",
-                                               "--report", "--title"};
-  pcl_movers::tools::checkArguments(argc, argv, {"-h", "--help"}, with_value);
-  const auto positional = pcl_movers::tools::positionalArguments(argc, argv, with_value);
+  const auto args = optionTable().parse(argc, argv);
+  const auto& positional = args.positional;
   if (positional.size() != 1)
     throw InputError("expected the output folder OUT, got " + std::to_string(positional.size()) +
                      " positional arguments; see -h");
-  Options opt = parseOptions(argc, argv);
+  Options opt = parseOptions(args);
   const fs::path out = positional[0];
   if (fs::exists(out) && !fs::is_directory(out))
     throw InputError(out.string() + ": exists and is not a folder");

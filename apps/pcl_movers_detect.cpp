@@ -27,6 +27,7 @@
 #include <map>
 #include <set>
 #include <sstream>
+#include <type_traits>
 
 #include "tool_utils.h"
 
@@ -42,25 +43,59 @@ namespace {
 using PointT = pcl::PointXYZI;
 using Detector = pcl_movers::MoverDetector<PointT>;
 
-const std::vector<std::string> kFlags{"-h",
-                                      "--help",
-                                      "--overwrite",
-                                      "--labelled-clouds",
-                                      "--point-labels",
-                                      "--estimate-poses",
-                                      "--print-config",
-                                      "--skip-bad-frames",
-                                      "--resume"};
+/// In OUT/labelled/: the run_key of the run that wrote the labelled clouds (see summary.json).
+const char* const kRunKeyFile = "run_key.txt";
 
-std::vector<std::string> optionsWithValue() {
-  std::vector<std::string> with_value{"--config", "--rate",  "--stop-after-frames",
-                                      "--poses",  "--calib", "--poses-format"};
-  for (const auto& key : DetectorParameters().keys()) with_value.push_back("--" + key);
-  return with_value;
+/** The command-line spelling of a parameter key: sensor_height -> --sensor-height. */
+std::string optionName(std::string key) {
+  std::replace(key.begin(), key.end(), '_', '-');
+  return "--" + key;
+}
+
+/** Every option, with its default; the parameters' options come from DetectorParameters, so a
+ * parameter added there is an option here. */
+pcl_movers::tools::OptionTable optionTable() {
+  const std::string rate = pcl_movers::tools::str(pcl_movers::io::SequenceOptions().rate_hz);
+  pcl_movers::tools::OptionTable table(
+      {{"--config", "FILE", "'key = value' lines with any of the parameters below"},
+       {"--rate", "HZ", "frame rate when SEQ has no times.txt", rate},
+       {"--poses", "FILE", "sensor poses from FILE instead of SEQ/poses.txt"},
+       {"--poses-format", "F",
+        "kitti (3x4 rows, one per frame), tum (timestamp x y z qx qy qz qw,\nmatched to the frame "
+        "times and interpolated when the counts differ)\nor kitti-camera (KITTI odometry camera "
+        "poses)",
+        "kitti"},
+       {"--calib", "FILE", "KITTI calib.txt for kitti-camera: pose = Tr^-1 * P_cam * Tr"},
+       {"--estimate-poses", "",
+        "estimate the sensor poses from the scans even when SEQ has poses\n(always done when it "
+        "has none; SEQ/poses.txt is then not read)"},
+       {"--labelled-clouds", "", "also write OUT/labelled/<input name>.pcd"},
+       {"--point-labels", "", "also write OUT/labels/<input name>.label (moving / static)"},
+       {"--overwrite", "",
+        "write into a non-empty OUT; removes what an earlier run wrote\nthere (tracks.csv, "
+        "tracks.json, summary.json, labelled/*.pcd, labels/*.label)"},
+       {"--skip-bad-frames", "",
+        "a malformed frame (truncated, not a PCD, ...) is warned about,\ncounted in summary.json "
+        "and treated as blind instead of an error"},
+       {"--resume", "",
+        "continue the interrupted run in OUT after its last complete frame\n(same SEQ and "
+        "options; the done frames are run again, unwritten)"},
+       {"--stop-after-frames", "N", "stop as on SIGINT after N frames (for tests)"},
+       {"--print-config", "", "print the parameters as a config file and exit"},
+       {"", "",
+        "\nParameters (--name VALUE, or 'name = value' in the config file, where the\n"
+        "snake_case key, sensor_height, also works):"}});
+  DetectorParameters().forEachParameter([&](const char* key, const auto& value, const char* doc) {
+    using T = std::decay_t<decltype(value)>;
+    const char* kind = std::is_same<T, std::string>::value ? "S"
+                       : std::is_same<T, int>::value       ? "N"
+                                                           : "X";
+    table.add({optionName(key), kind, doc, pcl_movers::detail::formatValue(value)});
+  });
+  return table;
 }
 
 void printHelp(const char* name) {
-  const DetectorParameters defaults;
   std::ostringstream os;
   os << "Usage: " << name << " SEQ OUT [options]\n\n"
      << "Detects movers (moving vehicles and people) in the LiDAR sequence folder SEQ (scans\n"
@@ -72,11 +107,13 @@ void printHelp(const char* name) {
      << "  tracks.json    per frame: index, file number, time, track ids and the movers (box,\n"
      << "                 velocity, similarity)\n"
      << "  summary.json   state (running/interrupted/finished, last complete frame), blind and\n"
-     << "                 bad frames, per-stage timings, counts and the parameters used\n"
+     << "                 bad frames, per-stage timings, counts, the parameters used and the\n"
+     << "                 run_key (a hash of input, options and parameters)\n"
      << "  labelled/      with --labelled-clouds: one PCD per frame named as its input file,\n"
      << "                 the input's points in its order with its fields, plus label (0\n"
      << "                 unlabelled or not kept, 1 ground, 2 static, 3 mover) and track (or "
-        "-1)\n"
+        "-1);\n"
+     << "                 run_key.txt: summary.json's run_key (pcl_movers_viewer checks it)\n"
      << "  labels/        with --point-labels: NAME.label per frame (NAME: the input file's name\n"
      << "                 without extension, as labelled/), SemanticKITTI-MOS layout: one\n"
      << "                 little-endian uint32 per input point in the input's order, class in the\n"
@@ -84,40 +121,16 @@ void printHelp(const char* name) {
      << "                 bicyclist or 251 unknown, from the box size; 9 other returns; 0 no\n"
      << "                 return), the mover's track id in the high 16; all 0 for blind or bad\n"
      << "                 frames. Score with pcl_movers_eval --mos\n\n"
-     << "Options:\n"
-     << "  --config FILE      'key = value' lines with any of the parameters below\n"
-     << "  --rate HZ          frame rate when SEQ has no times.txt (default 10)\n"
-     << "  --poses FILE       sensor poses from FILE instead of SEQ/poses.txt\n"
-     << "  --poses-format F   kitti (3x4 rows, one per frame; default), tum (timestamp x y z qx\n"
-     << "                     qy qz qw, matched to the frame times and interpolated when the\n"
-     << "                     counts differ) or kitti-camera (KITTI odometry camera poses)\n"
-     << "  --calib FILE       KITTI calib.txt for kitti-camera: pose = Tr^-1 * P_cam * Tr\n"
-     << "  --estimate-poses   estimate the sensor poses from the scans even when SEQ has poses\n"
-     << "                     (always done when it has none; SEQ/poses.txt is then not read)\n"
-     << "  --labelled-clouds  also write OUT/labelled/<input name>.pcd\n"
-     << "  --point-labels     also write OUT/labels/<input name>.label (moving / static)\n"
-     << "  --overwrite        write into a non-empty OUT; removes what an earlier run wrote\n"
-     << "                     there (tracks.csv, tracks.json, summary.json, labelled/*.pcd,\n"
-     << "                     labels/*.label)\n"
-     << "  --skip-bad-frames  a malformed frame (truncated, not a PCD, ...) is warned about,\n"
-     << "                     counted in summary.json and treated as blind instead of an error\n"
-     << "  --resume           continue the interrupted run in OUT after its last complete frame\n"
-     << "                     (same SEQ and options; the done frames are run again, unwritten)\n"
-     << "  --print-config     print the parameters as a config file and exit\n"
-     << "  -h, --help         this help\n\n"
+     << "Options (-h, --help: this help):\n"
+     << optionTable().help() << "\n"
      << "--sensor auto estimates the beam layout of unorganized scans from the first one and\n"
      << "uses a preset's calibration when it recognizes its beams (organized scans keep theirs).\n"
      << "A frame without returns (or, with --sensor auto, too few to estimate the beam layout\n"
      << "from) is blind: a warning, its tracks coast, the run goes on. SIGINT/SIGTERM stop the "
         "run\n"
      << "after the current frame: tracks.csv keeps every complete frame, summary.json says\n"
-     << "\"interrupted\": true, exit code 130/143. Geo-referenced (UTM) poses are fine.\n\n"
-     << "Parameters (--KEY VALUE or in the config file; defaults shown):\n";
-  defaults.forEachParameter([&](const char* key, const auto& value, const char* doc) {
-    std::string k = std::string("  --") + key + " " + pcl_movers::detail::formatValue(value);
-    if (k.size() < 36) k.resize(36, ' ');
-    os << k << " " << doc << "\n";
-  });
+     << "\"interrupted\": true, exit code 130/143. Geo-referenced (UTM) poses are fine.\n"
+     << "Older spellings with '_' (--sensor_height) still work, with a warning.\n";
   print_info("%s", os.str().c_str());
 }
 
@@ -312,14 +325,13 @@ double parseRate(const std::string& r) {
 }
 
 /** --poses, --poses-format, --calib and --estimate-poses, checked together. */
-void parsePoseOptions(int argc, char** argv, Options& o) {
+void parsePoseOptions(const pcl_movers::tools::Arguments& args, Options& o) {
   auto& in = o.input;
   std::string format;
-  pcl::console::parse_argument(argc, argv, "--poses", in.poses_path);
-  pcl::console::parse_argument(argc, argv, "--calib", in.calib_path);
-  if (pcl::console::parse_argument(argc, argv, "--poses-format", format) >= 0)
-    in.poses_format = pcl_movers::io::parsePoseFormat(format);
-  o.force_estimate = pcl::console::find_switch(argc, argv, "--estimate-poses");
+  args.get("--poses", in.poses_path);
+  args.get("--calib", in.calib_path);
+  if (args.get("--poses-format", format)) in.poses_format = pcl_movers::io::parsePoseFormat(format);
+  o.force_estimate = args.has("--estimate-poses");
   if (in.poses_path.empty() && (!format.empty() || !in.calib_path.empty()))
     throw InputError(std::string(format.empty() ? "--calib" : "--poses-format") +
                      " needs --poses FILE");
@@ -332,40 +344,36 @@ void parsePoseOptions(int argc, char** argv, Options& o) {
 
 /** Options from argv; false when the run is done already (--print-config). */
 bool parseOptions(int argc, char** argv, Options& o) {
-  const auto with_value = optionsWithValue();
-  pcl_movers::tools::checkArguments(argc, argv, kFlags, with_value);
+  const auto args = optionTable().parse(argc, argv);
   std::string config, v;
-  if (pcl::console::parse_argument(argc, argv, "--config", config) >= 0)
-    o.params.readConfig(config);
+  if (args.get("--config", config)) o.params.readConfig(config);
   for (const auto& key : o.params.keys())
-    if (pcl::console::parse_argument(argc, argv, ("--" + key).c_str(), v) >= 0)
-      o.params.set(key, v, "--" + key);
+    if (args.get(optionName(key), v)) o.params.set(key, v, optionName(key));
   o.params.validate();
-  if (pcl::console::find_switch(argc, argv, "--print-config")) {
+  if (args.has("--print-config")) {
     std::printf("%s", o.params.toConfig().c_str());
     return false;
   }
-  if (pcl::console::parse_argument(argc, argv, "--rate", v) >= 0) o.rate = parseRate(v);
-  parsePoseOptions(argc, argv, o);
-  if (pcl::console::parse_argument(argc, argv, "--stop-after-frames", v) >= 0) {
+  if (args.get("--rate", v)) o.rate = parseRate(v);
+  parsePoseOptions(args, o);
+  if (args.get("--stop-after-frames", v)) {
     const double n = pcl_movers::tools::parseNumber("--stop-after-frames", v);
     if (!(n >= 1) || n != std::floor(n))
       throw InputError("--stop-after-frames: '" + v + "' is not a positive whole number");
     o.stop_after = static_cast<long>(n);
   }
-  const auto positional = pcl_movers::tools::positionalArguments(argc, argv, with_value);
-  if (positional.size() != 2) {
+  if (args.positional.size() != 2) {
     printHelp(argv[0]);
-    throw InputError("expected 2 arguments SEQ OUT, got " + std::to_string(positional.size()));
+    throw InputError("expected 2 arguments SEQ OUT, got " + std::to_string(args.positional.size()));
   }
-  o.seq = positional[0];
-  o.out = positional[1];
-  o.overwrite = pcl::console::find_switch(argc, argv, "--overwrite");
-  o.labelled = pcl::console::find_switch(argc, argv, "--labelled-clouds");
-  o.point_labels = pcl::console::find_switch(argc, argv, "--point-labels");
+  o.seq = args.positional[0];
+  o.out = args.positional[1];
+  o.overwrite = args.has("--overwrite");
+  o.labelled = args.has("--labelled-clouds");
+  o.point_labels = args.has("--point-labels");
   o.input.rate_hz = o.rate;
-  o.skip_bad = pcl::console::find_switch(argc, argv, "--skip-bad-frames");
-  o.resume = pcl::console::find_switch(argc, argv, "--resume");
+  o.skip_bad = args.has("--skip-bad-frames");
+  o.resume = args.has("--resume");
   if (o.resume && o.overwrite)
     throw InputError("--resume continues the run in OUT; it cannot be combined with --overwrite");
   return true;
@@ -695,6 +703,7 @@ void DetectRun::clearEarlierOutputs() const {
     for (const auto& e : fs::directory_iterator(dir, ec))
       if (e.is_regular_file(ec) && e.path().extension() == extension) files.push_back(e.path());
     for (const auto& f : files) fs::remove(f, ec);
+    if (std::string(folder) == "labelled") fs::remove(dir / kRunKeyFile, ec);
     if (fs::is_empty(dir, ec)) fs::remove(dir, ec);
   }
 }
@@ -719,6 +728,11 @@ void DetectRun::prepare() {
   if (o_.labelled && !fs::exists(labelled_dir)) {
     fs::create_directories(labelled_dir);
     created_labelled_dir_ = true;
+  }
+  if (o_.labelled && !o_.resume) {  // pcl_movers_viewer checks it against summary.json's run_key
+    const std::string stamp = labelled_dir + "/" + kRunKeyFile;
+    created_.push_back(stamp);
+    std::ofstream(stamp) << st_.run_key << "\n";
   }
   const std::string labels_dir = o_.out + "/labels";
   if (o_.point_labels && !fs::exists(labels_dir)) {
@@ -932,10 +946,11 @@ int run(int argc, char** argv) {
   }
   Options o;
   if (!parseOptions(argc, argv, o)) return 0;
-  if (fs::is_regular_file(o.seq))
+  if (!fs::is_directory(o.seq) && (fs::exists(o.seq) || pcl_movers::io::isScanFile(o.seq)))
     throw InputError(o.seq, 0,
-                     "is a file; SEQ is a sequence folder (the folder holding the scans, or the "
-                     "one holding frames/ or velodyne/)");
+                     std::string(fs::exists(o.seq) ? "is a file" : "does not exist") +
+                         ": pcl_movers_detect takes a sequence folder (the folder holding the "
+                         "scans, or the one holding frames/ or velodyne/), not a single scan");
   pcl_movers::io::SequenceReader reader(o.seq, o.input);
   if (fs::exists(o.out) && !fs::is_directory(o.out))
     throw InputError(o.out, 0, "output exists and is not a folder");

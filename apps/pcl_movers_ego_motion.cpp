@@ -41,35 +41,42 @@ struct Options {
   int max_frames = 0;
 };
 
-void printHelp(const char* argv0) {
+pcl_movers::tools::OptionTable optionTable() {
+  using pcl_movers::tools::str;
   const Options d;
+  return pcl_movers::tools::OptionTable(
+      {{"--voxel", "M", "voxel grid leaf [m]", str(d.voxel)},
+       {"--min-range", "M", "drop nearer points (ego vehicle) [m]", str(d.min_range)},
+       {"--max-range", "M", "drop further points [m]", str(d.max_range)},
+       {"--max-corr", "M", "correspondence distance of the first iteration [m]",
+        str(d.max_correspondence)},
+       {"--trim", "F", "fraction of correspondences kept", str(d.trim)},
+       {"--iterations", "N", "ICP iterations per frame", std::to_string(d.iterations)},
+       {"--map-size", "N", "keyframes in the local map", std::to_string(d.map_size)},
+       {"--planar", "", "estimate x, y and yaw only"},
+       {"--vertical-ground", "",
+        "make near-horizontal map normals exactly vertical, so the ground\nfixes only z, roll "
+        "and pitch",
+        "off"},
+       {"--max-frames", "N", "only the first N frames", "all"},
+       {"--reference", "FILE",
+        "reference poses (KITTI format) to report the drift against; re-based\nso that its "
+        "first pose is the identity"},
+       {"--calib", "FILE",
+        "the reference is in another frame (KITTI odometry poses of camera 0):\nmap it with this "
+        "file's Tr (velodyne->camera):\npose_velo = Tr^-1 * pose_cam * Tr"},
+       {"--overwrite", "", "replace OUT_POSES if it exists"}});
+}
+
+void printHelp(const char* argv0) {
   std::printf(
       "Usage: %s SEQUENCE OUT_POSES [options]\n"
       "  Estimates the sensor->world pose of every frame of SEQUENCE from the scans themselves\n"
       "  (point-to-plane ICP against a local map of recent keyframes; world = first frame) and\n"
       "  writes them to OUT_POSES in the KITTI poses.txt format. Any poses the sequence has are\n"
       "  ignored (use --reference to compare against them).\n\n"
-      "Options:\n"
-      "  --voxel M          voxel grid leaf [m] (default %g)\n"
-      "  --min-range M      drop nearer points (ego vehicle) [m] (default %g)\n"
-      "  --max-range M      drop further points [m] (default %g)\n"
-      "  --max-corr M       correspondence distance of the first iteration [m] (default %g)\n"
-      "  --trim F           fraction of correspondences kept (default %g)\n"
-      "  --iterations N     ICP iterations per frame (default %d)\n"
-      "  --map-size N       keyframes in the local map (default %d)\n"
-      "  --planar           estimate x, y and yaw only\n"
-      "  --vertical-ground  make near-horizontal map normals exactly vertical, so the ground\n"
-      "                     fixes only z, roll and pitch (default: off)\n"
-      "  --max-frames N     only the first N frames (default: all)\n"
-      "  --reference FILE   reference poses (KITTI format) to report the drift against; re-based\n"
-      "                     so that its first pose is the identity\n"
-      "  --calib FILE       the reference is in another frame (KITTI odometry poses of camera 0):\n"
-      "                     map it with this file's Tr (velodyne->camera):\n"
-      "                     pose_velo = Tr^-1 * pose_cam * Tr\n"
-      "  --overwrite        replace OUT_POSES if it exists\n"
-      "  -h, --help         this help\n",
-      argv0, d.voxel, d.min_range, d.max_range, d.max_correspondence, d.trim, d.iterations,
-      d.map_size);
+      "Options (-h, --help: this help):\n%s",
+      argv0, optionTable().help().c_str());
 }
 
 using pcl_movers::tools::parseNumber;
@@ -118,43 +125,33 @@ double yawOf(const Eigen::Matrix3d& r) {
 }
 
 int run(int argc, char** argv) {
-  const std::vector<std::string> with_value = {
-      "--voxel",      "--min-range", "--max-range",  "--max-corr",  "--trim",
-      "--iterations", "--map-size",  "--max-frames", "--reference", "--calib"};
-  pcl_movers::tools::checkArguments(
-      argc, argv, {"-h", "--help", "--planar", "--vertical-ground", "--overwrite"}, with_value);
-  const auto positional = pcl_movers::tools::positionalArguments(argc, argv, with_value);
+  const auto args = optionTable().parse(argc, argv);
+  const auto& positional = args.positional;
   if (positional.size() != 2)
     throw InputError("expected SEQUENCE and OUT_POSES, got " + std::to_string(positional.size()) +
                      " argument(s); see -h");
   Options opt;
   std::string v;
-  if (pcl::console::parse_argument(argc, argv, "--voxel", v) >= 0)
-    opt.voxel = positive("--voxel", v);
-  if (pcl::console::parse_argument(argc, argv, "--min-range", v) >= 0) {
+  if (args.get("--voxel", v)) opt.voxel = positive("--voxel", v);
+  if (args.get("--min-range", v)) {
     opt.min_range = parseNumber("--min-range", v);
     if (opt.min_range < 0) throw InputError("--min-range: must be >= 0, got '" + v + "'");
   }
-  if (pcl::console::parse_argument(argc, argv, "--max-range", v) >= 0)
-    opt.max_range = positive("--max-range", v);
+  if (args.get("--max-range", v)) opt.max_range = positive("--max-range", v);
   if (opt.max_range <= opt.min_range) throw InputError("--max-range must exceed --min-range");
-  if (pcl::console::parse_argument(argc, argv, "--max-corr", v) >= 0)
-    opt.max_correspondence = positive("--max-corr", v);
-  if (pcl::console::parse_argument(argc, argv, "--trim", v) >= 0) {
+  if (args.get("--max-corr", v)) opt.max_correspondence = positive("--max-corr", v);
+  if (args.get("--trim", v)) {
     opt.trim = positive("--trim", v);
     if (opt.trim > 1) throw InputError("--trim: must be in (0, 1], got '" + v + "'");
   }
-  if (pcl::console::parse_argument(argc, argv, "--iterations", v) >= 0)
-    opt.iterations = count("--iterations", v);
-  if (pcl::console::parse_argument(argc, argv, "--map-size", v) >= 0)
-    opt.map_size = count("--map-size", v);
-  if (pcl::console::parse_argument(argc, argv, "--max-frames", v) >= 0)
-    opt.max_frames = count("--max-frames", v);
-  pcl::console::parse_argument(argc, argv, "--reference", opt.reference);
-  pcl::console::parse_argument(argc, argv, "--calib", opt.calib);
-  opt.planar = pcl::console::find_switch(argc, argv, "--planar");
-  opt.vertical_ground = pcl::console::find_switch(argc, argv, "--vertical-ground");
-  opt.overwrite = pcl::console::find_switch(argc, argv, "--overwrite");
+  if (args.get("--iterations", v)) opt.iterations = count("--iterations", v);
+  if (args.get("--map-size", v)) opt.map_size = count("--map-size", v);
+  if (args.get("--max-frames", v)) opt.max_frames = count("--max-frames", v);
+  args.get("--reference", opt.reference);
+  args.get("--calib", opt.calib);
+  opt.planar = args.has("--planar");
+  opt.vertical_ground = args.has("--vertical-ground");
+  opt.overwrite = args.has("--overwrite");
   if (!opt.calib.empty() && opt.reference.empty())
     throw InputError("--calib only applies to --reference");
 

@@ -51,6 +51,47 @@ struct Options {
   bool overwrite = false;
 };
 
+pcl_movers::tools::OptionTable optionTable() {
+  using pcl_movers::tools::str;
+  const Options d;
+  return pcl_movers::tools::OptionTable(
+      {{"--sector-deg", "D", "half-width of the scored sector around +x [deg]; 180 = all around",
+        str(d.metrics.sector_deg)},
+       {"--min-points", "N", "points a target needs to be visible",
+        std::to_string(d.metrics.min_points)},
+       {"--grow", "M", "growth of the box length and width [m]", str(d.metrics.grow_xy)},
+       {"--grow-z", "M", "growth of the box height [m]", str(d.metrics.grow_z)},
+       {"--frames", "N",
+        "sequence length for false alarms per frame (default: the sequence's\nlength with "
+        "--sequence, else the number of distinct frames in\nOBJECTS and TRACKS, which can only "
+        "undercount)"},
+       {"--sequence", "DIR",
+        std::string("sequence folder: its length, poses.txt and times.txt are used, and\nwhen it "
+                    "holds ") +
+            kSequenceLabels + " and " + kSequenceCalib +
+            ", their DontCare\nregions (as --dont-care and --calib; said on stderr)"},
+       {"--dont-care",
+        "FILE",
+        "KITTI tracking label file: a mover row whose centroid projects into a\nDontCare box of "
+        "its frame, and lies in no labelled box, is ignored\n(neither hit nor false alarm, as in "
+        "KITTI's benchmark); needs --calib",
+        "",
+        {"--dontcare"}},
+       {"--calib", "FILE", "KITTI calib file (P2, R0_rect, Tr_velo_cam) for --dont-care"},
+       {"--no-dont-care",
+        "",
+        "count the rows in DontCare regions as false alarms",
+        d.no_dont_care ? "counted" : "ignored when available",
+        {"--no-dontcare"}},
+       {"--poses", "FILE", "sensor->world poses (KITTI format) for velocity vectors"},
+       {"--times", "FILE", "timestamps per frame", "10 Hz"},
+       {"--png", "FILE", "write a hit-% per target bar chart"},
+       {"--title", "TEXT", "chart title", "\"" + d.title + "\""},
+       {"--json", "FILE", "write the scores as JSON"},
+       {"--overwrite", "", "replace existing --png/--json files"},
+       {"--mos", "", "score per-point labels: GT_LABELS PRED_LABELS instead of OBJECTS TRACKS"}});
+}
+
 void printHelp(const char* argv0) {
   const Options d;
   std::printf(
@@ -77,34 +118,8 @@ void printHelp(const char* argv0) {
       "  not scored. Moving IoU = TP / (TP + FP + FN) over all points of all frames (a prediction\n"
       "  of 0 on a scored point is an FN), static IoU likewise; then per-frame counts. A\n"
       "  prediction missing for a ground-truth frame, or with another point count, is an error.\n\n"
-      "Options:\n"
-      "  --sector-deg D   half-width of the scored sector around +x [deg] (default %g; 180 =\n"
-      "                   all around)\n"
-      "  --min-points N   points a target needs to be visible (default %d)\n"
-      "  --grow M         growth of the box length and width [m] (default %g)\n"
-      "  --grow-z M       growth of the box height [m] (default %g)\n"
-      "  --frames N       sequence length for false alarms per frame (default: the sequence's\n"
-      "                   length with --sequence, else the number of distinct frames in\n"
-      "                   OBJECTS and TRACKS, which can only undercount)\n"
-      "  --sequence DIR   sequence folder: its length, poses.txt and times.txt are used, and\n"
-      "                   when it holds %s and %s, their DontCare\n"
-      "                   regions (as --dontcare and --calib; said on stderr)\n"
-      "  --dontcare FILE  KITTI tracking label file: a mover row whose centroid projects into a\n"
-      "                   DontCare box of its frame, and lies in no labelled box, is ignored\n"
-      "                   (neither hit nor false alarm, as in KITTI's benchmark); needs --calib\n"
-      "  --calib FILE     KITTI calib file (P2, R0_rect, Tr_velo_cam) for --dontcare\n"
-      "  --no-dontcare    count the rows in DontCare regions as false alarms\n"
-      "                   (default: %s)\n"
-      "  --poses FILE     sensor->world poses (KITTI format) for velocity vectors\n"
-      "  --times FILE     timestamps per frame (default 10 Hz)\n"
-      "  --png FILE       write a hit-%% per target bar chart\n"
-      "  --title TEXT     chart title (default \"%s\")\n"
-      "  --json FILE      write the scores as JSON\n"
-      "  --overwrite      replace existing --png/--json files\n"
-      "  -h, --help       this help\n",
-      argv0, argv0, d.metrics.velocity_half_window, d.metrics.moving_speed, d.metrics.sector_deg,
-      d.metrics.min_points, d.metrics.grow_xy, d.metrics.grow_z, kSequenceLabels, kSequenceCalib,
-      d.no_dont_care ? "counted" : "ignored when available", d.title.c_str());
+      "Options (-h, --help: this help):\n%s",
+      argv0, d.metrics.velocity_half_window, d.metrics.moving_speed, optionTable().help().c_str());
 }
 
 using pcl_movers::tools::parseNumber;
@@ -173,17 +188,17 @@ void writePng(const std::string& path, const pcl_movers::eval::DetectionScore& s
   });
 }
 
-/** The DontCare regions to apply: --dontcare/--calib, else the --sequence folder's KITTI files;
- * none with --no-dontcare. */
+/** The DontCare regions to apply: --dont-care/--calib, else the --sequence folder's KITTI files;
+ * none with --no-dont-care. */
 std::shared_ptr<const pcl_movers::eval::DontCareRegions> loadDontCare(const Options& opt) {
   const bool given = !opt.dont_care_path.empty() || !opt.calib_path.empty();
   if (opt.no_dont_care) {
-    if (given) throw InputError("--no-dontcare contradicts --dontcare/--calib");
+    if (given) throw InputError("--no-dont-care contradicts --dont-care/--calib");
     return nullptr;
   }
   if (given && (opt.dont_care_path.empty() || opt.calib_path.empty()))
-    throw InputError(opt.dont_care_path.empty() ? "--calib needs --dontcare LABELS"
-                                                : "--dontcare needs --calib CALIB");
+    throw InputError(opt.dont_care_path.empty() ? "--calib needs --dont-care LABELS"
+                                                : "--dont-care needs --calib CALIB");
   std::string labels = opt.dont_care_path, calib = opt.calib_path;
   if (!given && !opt.sequence.empty()) {
     const fs::path dir(opt.sequence);
@@ -200,7 +215,7 @@ std::shared_ptr<const pcl_movers::eval::DontCareRegions> loadDontCare(const Opti
   pcl::console::print_info(
       stderr, "DontCare: %zu KITTI DontCare boxes from %s (calib %s); rows there are ignored%s\n",
       regions->size(), labels.c_str(), calib.c_str(),
-      given ? "" : " (--no-dontcare to count them)");
+      given ? "" : " (--no-dont-care to count them)");
   return regions;
 }
 
@@ -214,18 +229,19 @@ std::string labelsFolder(const std::string& dir) {
 }
 
 /** --mos GT PRED: moving-point IoU of per-point labels. */
-int runMos(int argc, char** argv, const std::vector<std::string>& positional) {
+int runMos(const pcl_movers::tools::Arguments& args) {
+  const auto& positional = args.positional;
   if (positional.size() != 2)
     throw InputError("--mos expects GT_LABELS and PRED_LABELS folders, got " +
                      std::to_string(positional.size()) + " argument(s); see -h");
   for (const char* flag :
        {"--sector-deg", "--min-points", "--grow", "--grow-z", "--frames", "--sequence", "--poses",
-        "--times", "--png", "--title", "--dontcare", "--calib", "--no-dontcare"})
-    if (pcl::console::find_argument(argc, argv, flag) >= 0)
+        "--times", "--png", "--title", "--dont-care", "--calib", "--no-dont-care"})
+    if (args.has(flag))
       throw InputError(std::string(flag) + " is for scoring tracks; --mos takes --json only");
   std::string json_path;
-  pcl::console::parse_argument(argc, argv, "--json", json_path);
-  checkOutput(json_path, pcl::console::find_switch(argc, argv, "--overwrite"));
+  args.get("--json", json_path);
+  checkOutput(json_path, args.has("--overwrite"));
   const std::string truth = labelsFolder(positional[0]), prediction = labelsFolder(positional[1]);
   const auto score = pcl_movers::eval::scoreMosFolders(truth, prediction);
   std::cout << "Moving-object segmentation: " << prediction << " against " << truth << "\n\n"
@@ -238,46 +254,41 @@ int runMos(int argc, char** argv, const std::vector<std::string>& positional) {
 }
 
 int run(int argc, char** argv) {
-  const std::vector<std::string> with_value = {
-      "--sector-deg", "--min-points", "--grow",  "--grow-z", "--frames",   "--sequence", "--poses",
-      "--times",      "--png",        "--title", "--json",   "--dontcare", "--calib"};
-  pcl_movers::tools::checkArguments(
-      argc, argv, {"-h", "--help", "--overwrite", "--no-dontcare", "--mos"}, with_value);
-  const auto positional = pcl_movers::tools::positionalArguments(argc, argv, with_value);
-  if (pcl::console::find_switch(argc, argv, "--mos")) return runMos(argc, argv, positional);
+  const auto args = optionTable().parse(argc, argv);
+  const auto& positional = args.positional;
+  if (args.has("--mos")) return runMos(args);
   if (positional.size() != 2)
     throw InputError("expected OBJECTS and TRACKS, got " + std::to_string(positional.size()) +
                      " file argument(s); see -h");
 
   Options opt;
   std::string value;
-  if (pcl::console::parse_argument(argc, argv, "--sector-deg", value) >= 0) {
+  if (args.get("--sector-deg", value)) {
     opt.metrics.sector_deg = parseNumber("--sector-deg", value);
     if (!(opt.metrics.sector_deg > 0 && opt.metrics.sector_deg <= 180))
       throw InputError("--sector-deg: must be in (0, 180], got '" + value + "'");
   }
-  if (pcl::console::parse_argument(argc, argv, "--min-points", value) >= 0)
+  if (args.get("--min-points", value))
     opt.metrics.min_points = parseCount("--min-points", value, 0);
-  if (pcl::console::parse_argument(argc, argv, "--grow", value) >= 0) {
+  if (args.get("--grow", value)) {
     opt.metrics.grow_xy = parseNumber("--grow", value);
     if (opt.metrics.grow_xy < 0) throw InputError("--grow: must be >= 0, got '" + value + "'");
   }
-  if (pcl::console::parse_argument(argc, argv, "--grow-z", value) >= 0) {
+  if (args.get("--grow-z", value)) {
     opt.metrics.grow_z = parseNumber("--grow-z", value);
     if (opt.metrics.grow_z < 0) throw InputError("--grow-z: must be >= 0, got '" + value + "'");
   }
-  if (pcl::console::parse_argument(argc, argv, "--frames", value) >= 0)
-    opt.metrics.frames = parseCount("--frames", value, 1);
-  pcl::console::parse_argument(argc, argv, "--sequence", opt.sequence);
-  pcl::console::parse_argument(argc, argv, "--poses", opt.poses_path);
-  pcl::console::parse_argument(argc, argv, "--times", opt.times_path);
-  pcl::console::parse_argument(argc, argv, "--png", opt.png_path);
-  pcl::console::parse_argument(argc, argv, "--json", opt.json_path);
-  pcl::console::parse_argument(argc, argv, "--title", opt.title);
-  pcl::console::parse_argument(argc, argv, "--dontcare", opt.dont_care_path);
-  pcl::console::parse_argument(argc, argv, "--calib", opt.calib_path);
-  opt.no_dont_care = pcl::console::find_switch(argc, argv, "--no-dontcare");
-  opt.overwrite = pcl::console::find_switch(argc, argv, "--overwrite");
+  if (args.get("--frames", value)) opt.metrics.frames = parseCount("--frames", value, 1);
+  args.get("--sequence", opt.sequence);
+  args.get("--poses", opt.poses_path);
+  args.get("--times", opt.times_path);
+  args.get("--png", opt.png_path);
+  args.get("--json", opt.json_path);
+  args.get("--title", opt.title);
+  args.get("--dont-care", opt.dont_care_path);
+  args.get("--calib", opt.calib_path);
+  opt.no_dont_care = args.has("--no-dont-care");
+  opt.overwrite = args.has("--overwrite");
 
   checkOutput(opt.png_path, opt.overwrite);
   checkOutput(opt.json_path, opt.overwrite);

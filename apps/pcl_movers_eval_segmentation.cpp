@@ -56,8 +56,46 @@ struct Options {
   std::vector<std::string> kitti, sequences;
 };
 
-void printHelp(const char* argv0) {
+pcl_movers::tools::OptionTable optionTable() {
+  using pcl_movers::tools::str;
   const Options d;
+  pcl_movers::tools::OptionTable table(
+      {{"", "", "Inputs (at least one; each may be given several times):"},
+       {"--kitti", "DIR",
+        "SemanticKITTI layout: DIR/velodyne/NNNNNN.bin + DIR/labels/NNNNNN.label\n(only frames "
+        "with a label file are used)"},
+       {"--sequence", "DIR",
+        "a sequence folder with labels/NNNNNN.label (pcl_movers_simulate output)"},
+       {"--frames", "A-B", "frame index range within each input", "all"},
+       {"--sensor", "NAME",
+        "beam layout used to organize unorganized scans: hdl64, hdl32, vlp16,\nos1_64, ladar2d",
+        d.sensor},
+       {"", "", "\nGround removal:"}});
+  table.add(d.ground.options());
+  table.add(
+      {{"--local-slope-deg", "D", "steepest rise to a column neighbour still ground",
+        str(d.local_slope_deg)},
+       {"--range-noise", "M", "height noise forgiven by the local-slope test", str(d.range_noise)},
+       {"--slope-band", "M",
+        "column neighbours further than M from their plane are ignored by\nthe local-slope test",
+        str(d.slope_band)},
+       {"--no-local-slope", "", "plane distance only (the local-slope test off)"},
+       {"--baseline", "M", "the height-threshold baseline calls z < -sensor_height + M ground",
+        str(d.baseline)},
+       {"", "", "\nSegmentation:"},
+       {"--k", "F", "depth threshold factor: neighbours join if |dr| <= F * range", str(d.k)},
+       {"--floor", "M", "absolute floor of the depth threshold", str(d.floor)},
+       {"--gap", "N", "empty cells bridged between neighbours", std::to_string(d.gap)},
+       {"--bridge", "M", "longest gap bridged along a row, past empty and nearer cells",
+        str(d.bridge)},
+       {"", "", "\nScoring:"},
+       {"--min-points", "N", "smallest scored instance", std::to_string(d.min_points)},
+       {"--min-fraction", "F", "share of an instance one cluster must hold", str(d.min_fraction)},
+       {"--per-frame", "", "also print ground precision/recall of every frame"}});
+  return table;
+}
+
+void printHelp(const char* argv0) {
   std::printf(
       "Usage: %s [--kitti DIR]... [--sequence DIR]... [options]\n"
       "  Scores ground removal (GroundPlaneFilter) and object segmentation (RangeImageOrganizer +\n"
@@ -67,39 +105,9 @@ void printHelp(const char* argv0) {
       "  lane-marking are ground; unlabelled/outlier points are not scored. Objects: labelled\n"
       "  instances with >= --min-points points (things by instance id; trunks and poles split by\n"
       "  3D connected components); recovered = one cluster holds >= --min-fraction of the object.\n"
-      "  Points the organizer could not place in the range image are not scored for objects.\n\n"
-      "Inputs (at least one):\n"
-      "  --kitti DIR        SemanticKITTI layout: DIR/velodyne/NNNNNN.bin + "
-      "DIR/labels/NNNNNN.label\n"
-      "                     (only frames with a label file are used)\n"
-      "  --sequence DIR     a sequence folder with labels/NNNNNN.label (pcl_movers_simulate "
-      "output)\n"
-      "  --frames A-B       frame index range within each input (default: all)\n"
-      "  --sensor NAME      beam layout used to organize unorganized scans: hdl64, hdl32, vlp16,\n"
-      "                     os1_64, ladar2d (default %s)\n\n"
-      "Ground removal:\n"
-      "%s"
-      "  --local-slope-deg D  steepest rise to a column neighbour still ground (default %g)\n"
-      "  --range-noise M    height noise forgiven by the local-slope test (default %g)\n"
-      "  --slope-band M     column neighbours further than M from their plane are ignored by\n"
-      "                     the local-slope test (default %g)\n"
-      "  --no-local-slope   plane distance only (the local-slope test off)\n"
-      "  --baseline M       the height-threshold baseline calls z < -sensor_height + M ground\n"
-      "                     (default %g)\n\n"
-      "Segmentation:\n"
-      "  --k F              depth threshold factor: neighbours join if |dr| <= F * range (default "
-      "%g)\n"
-      "  --floor M          absolute floor of the depth threshold (default %g)\n"
-      "  --gap N            empty cells bridged between neighbours (default %d)\n"
-      "  --bridge M         longest gap bridged along a row, past empty and nearer cells (default "
-      "%g)\n\n"
-      "Scoring:\n"
-      "  --min-points N     smallest scored instance (default %d)\n"
-      "  --min-fraction F   share of an instance one cluster must hold (default %g)\n"
-      "  --per-frame        also print ground precision/recall of every frame\n"
-      "  -h, --help         this help\n",
-      argv0, d.sensor.c_str(), d.ground.help().c_str(), d.local_slope_deg, d.range_noise,
-      d.slope_band, d.baseline, d.k, d.floor, d.gap, d.bridge, d.min_points, d.min_fraction);
+      "  Points the organizer could not place in the range image are not scored for objects.\n"
+      "  -h, --help: this help.\n\n%s",
+      argv0, optionTable().help().c_str());
 }
 
 using pcl_movers::tools::parseNumber;
@@ -334,47 +342,35 @@ std::string pct(double v) {
 }
 
 int run(int argc, char** argv) {
-  std::vector<std::string> with_value = pcl_movers::tools::GroundOptions::flags();
-  for (const char* flag : {"--kitti", "--sequence", "--frames", "--sensor", "--baseline", "--k",
-                           "--floor", "--gap", "--min-points", "--min-fraction",
-                           "--local-slope-deg", "--range-noise", "--slope-band", "--bridge"})
-    with_value.push_back(flag);
-  pcl_movers::tools::checkArguments(argc, argv, {"-h", "--help", "--no-local-slope", "--per-frame"},
-                                    with_value);
-  const auto positional = pcl_movers::tools::positionalArguments(argc, argv, with_value);
+  const auto args = optionTable().parse(argc, argv);
+  const auto& positional = args.positional;
   if (!positional.empty())
     throw InputError("unexpected argument '" + positional.front() +
                      "' (inputs are given with --kitti / --sequence; see -h)");
   Options opt;
   std::string v;
-  opt.ground.parse(argc, argv);
-  if (pcl::console::parse_argument(argc, argv, "--local-slope-deg", v) >= 0) {
+  opt.ground.parse(args);
+  if (args.get("--local-slope-deg", v)) {
     opt.local_slope_deg = nonNegative("--local-slope-deg", v);
     if (opt.local_slope_deg >= 90) throw InputError("--local-slope-deg: must be below 90");
   }
-  if (pcl::console::parse_argument(argc, argv, "--range-noise", v) >= 0)
-    opt.range_noise = nonNegative("--range-noise", v);
-  if (pcl::console::parse_argument(argc, argv, "--slope-band", v) >= 0)
-    opt.slope_band = nonNegative("--slope-band", v);
-  if (pcl::console::find_switch(argc, argv, "--no-local-slope")) opt.local_slope = false;
-  if (pcl::console::find_switch(argc, argv, "--per-frame")) opt.per_frame = true;
-  if (pcl::console::parse_argument(argc, argv, "--baseline", v) >= 0)
-    opt.baseline = parseNumber("--baseline", v);
-  if (pcl::console::parse_argument(argc, argv, "--k", v) >= 0) opt.k = nonNegative("--k", v);
-  if (pcl::console::parse_argument(argc, argv, "--floor", v) >= 0)
-    opt.floor = nonNegative("--floor", v);
-  if (pcl::console::parse_argument(argc, argv, "--gap", v) >= 0) opt.gap = integer("--gap", v, 0);
-  if (pcl::console::parse_argument(argc, argv, "--bridge", v) >= 0)
-    opt.bridge = nonNegative("--bridge", v);
-  if (pcl::console::parse_argument(argc, argv, "--min-points", v) >= 0)
-    opt.min_points = integer("--min-points", v, 1);
-  if (pcl::console::parse_argument(argc, argv, "--min-fraction", v) >= 0) {
+  if (args.get("--range-noise", v)) opt.range_noise = nonNegative("--range-noise", v);
+  if (args.get("--slope-band", v)) opt.slope_band = nonNegative("--slope-band", v);
+  if (args.has("--no-local-slope")) opt.local_slope = false;
+  if (args.has("--per-frame")) opt.per_frame = true;
+  if (args.get("--baseline", v)) opt.baseline = parseNumber("--baseline", v);
+  if (args.get("--k", v)) opt.k = nonNegative("--k", v);
+  if (args.get("--floor", v)) opt.floor = nonNegative("--floor", v);
+  if (args.get("--gap", v)) opt.gap = integer("--gap", v, 0);
+  if (args.get("--bridge", v)) opt.bridge = nonNegative("--bridge", v);
+  if (args.get("--min-points", v)) opt.min_points = integer("--min-points", v, 1);
+  if (args.get("--min-fraction", v)) {
     opt.min_fraction = positive("--min-fraction", v);
     if (opt.min_fraction > 1) throw InputError("--min-fraction: must be <= 1");
   }
-  if (pcl::console::parse_argument(argc, argv, "--sensor", v) >= 0) opt.sensor = v;
+  if (args.get("--sensor", v)) opt.sensor = v;
   pcl_movers::SensorModel::fromName(opt.sensor);  // throws on an unknown name
-  if (pcl::console::parse_argument(argc, argv, "--frames", v) >= 0) {
+  if (args.get("--frames", v)) {
     const auto dash = v.find('-');
     if (dash == std::string::npos) {
       opt.first = opt.last = integer("--frames", v, 0);
@@ -384,12 +380,8 @@ int run(int argc, char** argv) {
     }
     if (opt.last < opt.first) throw InputError("--frames: empty range '" + v + "'");
   }
-  for (int i = 1; i + 1 < argc; ++i) {
-    if (std::string(argv[i]) == "--kitti")
-      opt.kitti.push_back(argv[++i]);
-    else if (std::string(argv[i]) == "--sequence")
-      opt.sequences.push_back(argv[++i]);
-  }
+  opt.kitti = args.all("--kitti");
+  opt.sequences = args.all("--sequence");
   if (opt.kitti.empty() && opt.sequences.empty())
     throw InputError("no input: give --kitti DIR and/or --sequence DIR (see -h)");
 

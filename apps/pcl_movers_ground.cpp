@@ -32,8 +32,15 @@ struct Options {
   bool overwrite = false;
 };
 
-void printHelp(const char* argv0) {
+pcl_movers::tools::OptionTable optionTable() {
   const Options d;
+  pcl_movers::tools::OptionTable table({{"--mode", "M", "label, nonground or ground", d.mode},
+                                        {"--overwrite", "", "replace existing output files"}});
+  table.add(d.ground.options());
+  return table;
+}
+
+void printHelp(const char* argv0) {
   std::printf(
       "Usage: %s INPUT OUTPUT [options]\n"
       "  Finds the ground of LiDAR scans with local, roughly horizontal planes fitted by RANSAC "
@@ -50,12 +57,8 @@ void printHelp(const char* argv0) {
       "             input plus `label` (uint32): 1 = ground, 0 = not ground or invalid (NaN)\n"
       "  nonground  only the non-ground points (organized input stays organized, NaN elsewhere)\n"
       "  ground     only the ground points (same layout rule)\n\n"
-      "Options:\n"
-      "  --mode M           label, nonground or ground (default %s)\n"
-      "%s"
-      "  --overwrite        replace existing output files\n"
-      "  -h, --help         this help\n",
-      argv0, d.mode.c_str(), d.ground.help().c_str());
+      "Options (-h, --help: this help):\n%s",
+      argv0, optionTable().help().c_str());
 }
 
 using pcl_movers::tools::labelledBlob;
@@ -105,22 +108,20 @@ void processOne(const std::string& in, const std::string& out, const Options& op
 }
 
 int run(int argc, char** argv) {
-  std::vector<std::string> with_value = pcl_movers::tools::GroundOptions::flags();
-  with_value.push_back("--mode");
-  pcl_movers::tools::checkArguments(argc, argv, {"-h", "--help", "--overwrite"}, with_value);
-  const auto positional = pcl_movers::tools::positionalArguments(argc, argv, with_value);
+  const auto args = optionTable().parse(argc, argv);
+  const auto& positional = args.positional;
   if (positional.size() != 2)
     throw InputError("expected INPUT and OUTPUT, got " + std::to_string(positional.size()) +
                      " argument(s); see -h");
   Options opt;
-  opt.overwrite = pcl::console::find_switch(argc, argv, "--overwrite");
+  opt.overwrite = args.has("--overwrite");
   std::string v;
-  if (pcl::console::parse_argument(argc, argv, "--mode", v) >= 0) {
+  if (args.get("--mode", v)) {
     if (v != "label" && v != "nonground" && v != "ground")
       throw InputError("--mode: expected label, nonground or ground, got '" + v + "'");
     opt.mode = v;
   }
-  opt.ground.parse(argc, argv);
+  opt.ground.parse(args);
 
   const std::string& input = positional[0];
   const std::string& output = positional[1];

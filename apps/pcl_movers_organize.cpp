@@ -40,11 +40,35 @@ struct Options {
 
 const char* kSensors = "hdl64, hdl32, vlp16, os1_64, ladar2d or auto";
 
-void printHelp(const char* argv0) {
+pcl_movers::tools::OptionTable optionTable() {
   const Options d;
+  return pcl_movers::tools::OptionTable(
+      {{"--sensor", "S",
+        std::string("beam layout: ") + kSensors +
+            ";\nauto estimates it from the first scan and uses it for all, or the\npreset whose "
+            "beams it recognizes; hdl64 is KITTI's calibrated HDL-64E.\nWith --pcap: hdl32, vlp16 "
+            "or hdl64; auto tells it from the packets'\nfactory byte",
+        d.sensor},
+       {"--pcap", "FILE", "read a Velodyne capture instead of scans (see above)"},
+       {"--calib",
+        "XML",
+        "with --pcap: VeloView/PCL calibration file (db.xml format), required\nfor hdl64, "
+        "optional for hdl32 (default PCL's table), refused for vlp16",
+        "",
+        {"--calibration"}},
+       {"--columns", "N",
+        "azimuth columns per image (0 = the sensor's: hdl64 2200,\nhdl32/os1_64 2048, vlp16 "
+        "1800, ladar2d 360, auto: the beams' firings\nper turn + 2 %)",
+        std::to_string(d.columns)},
+       {"--max-range", "M", "leave out points further than M metres (0 = no limit)",
+        pcl_movers::tools::str(d.max_range)},
+       {"--overwrite", "", "replace an existing output file or non-empty output folder"}});
+}
+
+void printHelp(const char* argv0) {
   std::printf(
       "Usage: %s INPUT OUTPUT [options]\n"
-      "       %s --pcap CAPTURE.pcap OUT_FOLDER [--sensor hdl32|vlp16|hdl64] [--calibration XML]\n"
+      "       %s --pcap CAPTURE.pcap OUT_FOLDER [--sensor hdl32|vlp16|hdl64] [--calib XML]\n"
       "  Turns unorganized LiDAR scans into organized clouds (range images): one row per beam,\n"
       "  top to bottom, one column per azimuth step, NaN where no return (pcl_movers::\n"
       "  RangeImageOrganizer). Each point goes to the beam that best explains it, taking the\n"
@@ -65,22 +89,8 @@ void printHelp(const char* argv0) {
       "  reflectivity (0-255). times.txt holds each sweep's start from the packets' time stamps.\n"
       "  The output is a sequence folder every pcl_movers tool reads. Partial turns at the start\n"
       "  and end of the capture are left out.\n\n"
-      "Options:\n"
-      "  --sensor S      beam layout: %s (default %s;\n"
-      "                  auto estimates it from the first scan and uses it for all, or the\n"
-      "                  preset whose beams it recognizes; hdl64 is KITTI's calibrated HDL-64E).\n"
-      "                  With --pcap: hdl32, vlp16 or hdl64; auto tells it from the packets'\n"
-      "                  factory byte\n"
-      "  --pcap FILE     read a Velodyne capture instead of scans (see above)\n"
-      "  --calibration XML  with --pcap: VeloView/PCL calibration file (db.xml format), required\n"
-      "                  for hdl64, optional for hdl32 (default PCL's table), refused for vlp16\n"
-      "  --columns N     azimuth columns per image (default %d = the sensor's: hdl64 2200,\n"
-      "                  hdl32/os1_64 2048, vlp16 1800, ladar2d 360, auto: the beams' firings\n"
-      "                  per turn + 2 %%)\n"
-      "  --max-range M   leave out points further than M metres (default %g = no limit)\n"
-      "  --overwrite     replace an existing output file or non-empty output folder\n"
-      "  -h, --help      this help\n",
-      argv0, argv0, kSensors, d.sensor.c_str(), d.columns, double(d.max_range));
+      "Options (-h, --help: this help):\n%s",
+      argv0, argv0, optionTable().help().c_str());
 }
 
 using pcl_movers::tools::parseNumber;
@@ -172,40 +182,34 @@ int runCapture(const Options& opt, const std::string& output, bool columns_given
 }
 
 int run(int argc, char** argv) {
-  const std::vector<std::string> with_value = {"--sensor", "--columns", "--max-range", "--pcap",
-                                               "--calibration"};
-  pcl_movers::tools::checkArguments(argc, argv, {"-h", "--help", "--overwrite"}, with_value);
-  const auto positional = pcl_movers::tools::positionalArguments(argc, argv, with_value);
+  const auto args = optionTable().parse(argc, argv);
+  const auto& positional = args.positional;
   Options opt;
   std::string value;
-  if (pcl::console::parse_argument(argc, argv, "--pcap", value) >= 0) opt.pcap = value;
-  if (pcl::console::parse_argument(argc, argv, "--calibration", value) >= 0)
-    opt.calibration = value;
-  if (!opt.calibration.empty() && opt.pcap.empty())
-    throw InputError("--calibration: only with --pcap");
+  if (args.get("--pcap", value)) opt.pcap = value;
+  if (args.get("--calib", value)) opt.calibration = value;
+  if (!opt.calibration.empty() && opt.pcap.empty()) throw InputError("--calib: only with --pcap");
   if (!opt.pcap.empty() && positional.size() != 1)
     throw InputError("--pcap " + opt.pcap + ": expected one OUT_FOLDER, got " +
                      std::to_string(positional.size()) + " argument(s); see -h");
   if (opt.pcap.empty() && positional.size() != 2)
     throw InputError("expected INPUT and OUTPUT, got " + std::to_string(positional.size()) +
                      " argument(s); see -h");
-  opt.overwrite = pcl::console::find_switch(argc, argv, "--overwrite");
+  opt.overwrite = args.has("--overwrite");
   std::string v;
-  if (pcl::console::parse_argument(argc, argv, "--sensor", v) >= 0) opt.sensor = v;
-  if (pcl::console::parse_argument(argc, argv, "--columns", v) >= 0) {
+  if (args.get("--sensor", v)) opt.sensor = v;
+  if (args.get("--columns", v)) {
     const double c = parseNumber("--columns", v);
     if (c < 1 || c > 100000 || c != std::floor(c))
       throw InputError("--columns: expected an integer in 1..100000, got '" + v + "'");
     opt.columns = int(c);
   }
-  if (pcl::console::parse_argument(argc, argv, "--max-range", v) >= 0) {
+  if (args.get("--max-range", v)) {
     opt.max_range = float(parseNumber("--max-range", v));
     if (!(opt.max_range > 0)) throw InputError("--max-range: must be > 0, got '" + v + "'");
   }
 
-  if (!opt.pcap.empty())
-    return runCapture(opt, positional[0],
-                      pcl::console::find_argument(argc, argv, "--columns") >= 0);
+  if (!opt.pcap.empty()) return runCapture(opt, positional[0], args.has("--columns"));
 
   pcl_movers::RangeImageOrganizer<Point> organizer;
   if (opt.sensor != "auto") organizer.setSensorModel(pcl_movers::SensorModel::fromName(opt.sensor));

@@ -59,8 +59,42 @@ struct Options {
   bool overwrite = false;
 };
 
-void printHelp(const char* argv0) {
+pcl_movers::tools::OptionTable optionTable() {
+  using pcl_movers::tools::str;
   const Options d;
+  return pcl_movers::tools::OptionTable(
+      {{"--guess", "tx,ty,tz[,yaw]",
+        "initial guess, translation [m] and yaw [deg]; centres the\nsearch window", "identity"},
+       {"--radius", "M", "translation window half width [m]", str(d.radius)},
+       {"--resolution", "M", "density cell size in x/y, also the search step [m]",
+        str(d.resolution)},
+       {"--grid", "NX,NY,NZ", "density grid in cells",
+        std::to_string(d.nx) + "," + std::to_string(d.ny) + "," + std::to_string(d.nz)},
+       {"--height", "M", "height covered by the grid [m]", str(d.height)},
+       {"--slices", "N", "horizontal slices (grid NZ), e.g. 3", std::to_string(d.nz)},
+       {"--yaw-samples", "N", "yaw layers, odd; 1 = translation only",
+        std::to_string(d.yaw_samples)},
+       {"--yaw-step-deg",
+        "D",
+        "spacing of the yaw layers [deg]",
+        str(d.yaw_step_deg),
+        {"--yaw-step"}},
+       {"--sigma-per-metre", "S", "Gaussian sigma per metre of range", str(d.sigma_per_metre)},
+       {"--min-sigma", "M", "smallest sigma [m]", str(d.min_sigma)},
+       {"--min-similarity", "B", "B below this is reported as not converged",
+        str(d.min_similarity)},
+       {"--search-z", "", "also search vertical shifts", d.search_z ? "on" : "off"},
+       {"--radius-z", "M", "vertical window half height with --search-z [m]", str(d.radius_z)},
+       {"--sensor", "x,y,z", "sensor position for both clouds", "each PCD VIEWPOINT"},
+       {"--output", "FILE.pcd", "write the source moved onto the target (binary PCD)"},
+       {"--surface", "FILE.png",
+        "write B over the searched translations, one panel per yaw layer\n(x right, y up, guess "
+        "in the middle; colour = B, 0 blue .. 1 red)"},
+       {"--pixels", "N", "pixels per translation step in the PNG", std::to_string(d.pixels)},
+       {"--overwrite", "", "replace existing output files"}});
+}
+
+void printHelp(const char* argv0) {
   std::printf(
       "Usage: %s SOURCE.pcd TARGET.pcd [options]\n"
       "  Registers the SOURCE object onto the TARGET object by maximising the Bhattacharyya\n"
@@ -71,34 +105,10 @@ void printHelp(const char* argv0) {
       "  converged (peak inside the window and B >= the minimum) and the time.\n"
       "  Inputs: PCD or KITTI .bin with x y z; NaN points are skipped, Inf is an error. Point\n"
       "  spread grows with range from the sensor: the PCD VIEWPOINT origin, or --sensor.\n\n"
-      "Options:\n"
-      "  --guess tx,ty,tz[,yaw]   initial guess, translation [m] and yaw [deg]; centres the\n"
-      "                           search window (default identity)\n"
-      "  --radius M               translation window half width [m] (default %g)\n"
-      "  --resolution M           density cell size in x/y, also the search step [m] (default %g)\n"
-      "  --grid NX,NY,NZ          density grid in cells (default %d,%d,%d)\n"
-      "  --height M               height covered by the grid [m] (default %g)\n"
-      "  --slices N               horizontal slices (grid NZ), e.g. 3 (default %d)\n"
-      "  --yaw-samples N          yaw layers, odd; 1 = translation only (default %d)\n"
-      "  --yaw-step D             spacing of the yaw layers [deg] (default %g)\n"
-      "  --sigma-per-metre S      Gaussian sigma per metre of range (default %g)\n"
-      "  --min-sigma M            smallest sigma [m] (default %g)\n"
-      "  --min-similarity B       B below this is reported as not converged (default %g)\n"
-      "  --search-z               also search vertical shifts (default %s)\n"
-      "  --radius-z M             vertical window half height with --search-z [m] (default %g)\n"
-      "  --sensor x,y,z           sensor position for both clouds (default: each PCD VIEWPOINT)\n"
-      "  --output FILE.pcd        write the source moved onto the target (binary PCD)\n"
-      "  --surface FILE.png       write B over the searched translations, one panel per yaw layer\n"
-      "                           (x right, y up, guess in the middle; colour = B, 0 blue .. 1 "
-      "red)\n"
-      "  --pixels N               pixels per translation step in the PNG (default %d)\n"
-      "  --overwrite              replace existing output files\n"
-      "  -h, --help               this help\n"
+      "Options (-h, --help: this help):\n%s"
       "Exit status: 0 when the registration ran (converged or not, see the printout), 1 on bad\n"
       "input.\n",
-      argv0, d.radius, d.resolution, d.nx, d.ny, d.nz, d.height, d.nz, d.yaw_samples,
-      d.yaw_step_deg, d.sigma_per_metre, d.min_sigma, d.min_similarity, d.search_z ? "on" : "off",
-      d.radius_z, d.pixels);
+      argv0, optionTable().help().c_str());
 }
 
 double parseNumber(const std::string& flag, const std::string& text) {
@@ -128,17 +138,6 @@ std::vector<float> parseList(const std::string& flag, const std::string& text, s
 }
 
 /** Returns the value of option `flag` if present. */
-bool option(int argc, char** argv, const char* flag, std::string& value) {
-  for (int i = 1; i + 1 < argc; ++i)
-    if (std::string(argv[i]) == flag) {
-      value = argv[i + 1];
-      return true;
-    }
-  for (int i = 1; i < argc; ++i)
-    if (std::string(argv[i]) == flag) throw InputError(std::string(flag) + ": missing value");
-  return false;
-}
-
 float positive(const std::string& flag, double v) {
   if (!(v > 0)) throw InputError(flag + ": must be positive");
   return static_cast<float>(v);
@@ -217,24 +216,17 @@ void writeSurface(const std::string& path, const pcl_movers::SimilaritySurface& 
 }
 
 int run(int argc, char** argv) {
-  const std::vector<std::string> with_value = {
-      "--guess",           "--radius",    "--resolution",     "--grid",
-      "--height",          "--slices",    "--yaw-samples",    "--yaw-step",
-      "--sigma-per-metre", "--min-sigma", "--min-similarity", "--radius-z",
-      "--sensor",          "--output",    "--surface",        "--pixels"};
-  pcl_movers::tools::checkArguments(argc, argv, {"-h", "--help", "--search-z", "--overwrite"},
-                                    with_value);
-  const auto pos = pcl_movers::tools::positionalArguments(argc, argv, with_value);
+  const auto args = optionTable().parse(argc, argv);
+  const auto& pos = args.positional;
   if (pos.size() != 2)
     throw InputError("expected SOURCE and TARGET clouds, got " + std::to_string(pos.size()) +
                      " positional argument(s); see -h");
   Options o;
   std::string v;
-  if (option(argc, argv, "--radius", v))
-    o.radius = positive("--radius", parseNumber("--radius", v));
-  if (option(argc, argv, "--resolution", v))
+  if (args.get("--radius", v)) o.radius = positive("--radius", parseNumber("--radius", v));
+  if (args.get("--resolution", v))
     o.resolution = positive("--resolution", parseNumber("--resolution", v));
-  if (option(argc, argv, "--grid", v)) {
+  if (args.get("--grid", v)) {
     const auto g = parseList("--grid", v, 3, 3);
     for (float x : g)
       if (!(x >= 1.f && x <= 1000.f && std::floor(x) == x))
@@ -243,47 +235,45 @@ int run(int argc, char** argv) {
     o.ny = static_cast<int>(g[1]);
     o.nz = static_cast<int>(g[2]);
   }
-  if (option(argc, argv, "--height", v))
-    o.height = positive("--height", parseNumber("--height", v));
-  if (option(argc, argv, "--slices", v)) {
+  if (args.get("--height", v)) o.height = positive("--height", parseNumber("--height", v));
+  if (args.get("--slices", v)) {
     const double s = parseNumber("--slices", v);
     if (!(s >= 1 && s <= 1000 && std::floor(s) == s))
       throw InputError("--slices: must be an integer in 1..1000");
     o.nz = static_cast<int>(s);
   }
-  if (option(argc, argv, "--yaw-samples", v)) {
+  if (args.get("--yaw-samples", v)) {
     const double s = parseNumber("--yaw-samples", v);
     if (!(s >= 1 && s <= 181 && std::floor(s) == s && static_cast<int>(s) % 2 == 1))
       throw InputError("--yaw-samples: must be an odd integer in 1..181");
     o.yaw_samples = static_cast<int>(s);
   }
-  if (option(argc, argv, "--yaw-step", v))
-    o.yaw_step_deg = positive("--yaw-step", parseNumber("--yaw-step", v));
-  if (option(argc, argv, "--sigma-per-metre", v)) {
+  if (args.get("--yaw-step-deg", v))
+    o.yaw_step_deg = positive("--yaw-step-deg", parseNumber("--yaw-step-deg", v));
+  if (args.get("--sigma-per-metre", v)) {
     o.sigma_per_metre = static_cast<float>(parseNumber("--sigma-per-metre", v));
     if (o.sigma_per_metre < 0.f) throw InputError("--sigma-per-metre: must not be negative");
   }
-  if (option(argc, argv, "--min-sigma", v))
+  if (args.get("--min-sigma", v))
     o.min_sigma = positive("--min-sigma", parseNumber("--min-sigma", v));
-  if (option(argc, argv, "--min-similarity", v)) {
+  if (args.get("--min-similarity", v)) {
     o.min_similarity = static_cast<float>(parseNumber("--min-similarity", v));
     if (o.min_similarity < 0.f || o.min_similarity > 1.f)
       throw InputError("--min-similarity: must be in [0,1]");
   }
-  if (option(argc, argv, "--radius-z", v))
-    o.radius_z = positive("--radius-z", parseNumber("--radius-z", v));
-  o.search_z = o.search_z || pcl::console::find_switch(argc, argv, "--search-z");
-  if (option(argc, argv, "--guess", v)) o.guess = parseList("--guess", v, 3, 4);
-  if (option(argc, argv, "--sensor", v)) o.sensor = parseList("--sensor", v, 3, 3);
-  if (option(argc, argv, "--output", v)) o.output = v;
-  if (option(argc, argv, "--surface", v)) o.surface = v;
-  if (option(argc, argv, "--pixels", v)) {
+  if (args.get("--radius-z", v)) o.radius_z = positive("--radius-z", parseNumber("--radius-z", v));
+  o.search_z = o.search_z || args.has("--search-z");
+  if (args.get("--guess", v)) o.guess = parseList("--guess", v, 3, 4);
+  if (args.get("--sensor", v)) o.sensor = parseList("--sensor", v, 3, 3);
+  if (args.get("--output", v)) o.output = v;
+  if (args.get("--surface", v)) o.surface = v;
+  if (args.get("--pixels", v)) {
     const double p = parseNumber("--pixels", v);
     if (!(p >= 1 && p <= 64 && std::floor(p) == p))
       throw InputError("--pixels: must be an integer in 1..64");
     o.pixels = static_cast<int>(p);
   }
-  o.overwrite = pcl::console::find_switch(argc, argv, "--overwrite");
+  o.overwrite = args.has("--overwrite");
   if (!o.output.empty()) refuseExisting(o.output, o.overwrite);
   if (!o.surface.empty()) refuseExisting(o.surface, o.overwrite);
   const long window = 2L * static_cast<long>(std::ceil(o.radius / o.resolution)) + 1;

@@ -43,8 +43,27 @@ struct Options {
   bool overwrite = false;
 };
 
-void printHelp(const char* argv0) {
+pcl_movers::tools::OptionTable optionTable() {
   const Options d;
+  pcl_movers::tools::OptionTable table(
+      {{"--k", "F", "depth threshold factor", pcl_movers::tools::str(d.k)},
+       {"--floor", "M", "absolute floor of the depth threshold [m]",
+        pcl_movers::tools::str(d.floor)},
+       {"--gap", "N", "empty cells bridged between neighbours, 0 = strict 8-neighbours",
+        std::to_string(d.gap)},
+       {"--min-size", "N", "smallest cluster kept", std::to_string(d.min_size)},
+       {"--max-size", "N", "largest cluster kept", "no limit"},
+       {"--sensor", "NAME",
+        "beam layout for unorganized scans, and whether azimuth wraps\naround (360-degree "
+        "sensors): hdl64, hdl32, vlp16, os1_64, ladar2d",
+        d.sensor},
+       {"--keep-ground", "", "do not remove the ground first"},
+       {"--overwrite", "", "replace existing output files"}});
+  table.add(d.ground.options());
+  return table;
+}
+
+void printHelp(const char* argv0) {
   std::printf(
       "Usage: %s INPUT OUTPUT [options]\n"
       "  Segments LiDAR scans into objects as Morris et al. do: the ground is removed with local\n"
@@ -59,21 +78,8 @@ void printHelp(const char* argv0) {
       "  in a cluster outside --min-size/--max-size, or (unorganized input) a point that shared "
       "its\n"
       "  range-image cell with a nearer point.\n\n"
-      "Options:\n"
-      "  --k F              depth threshold factor (default %g)\n"
-      "  --floor M          absolute floor of the depth threshold [m] (default %g)\n"
-      "  --gap N            empty cells bridged between neighbours, 0 = strict 8-neighbours\n"
-      "                     (default %d)\n"
-      "  --min-size N       smallest cluster kept (default %d)\n"
-      "  --max-size N       largest cluster kept (default: no limit)\n"
-      "  --sensor NAME      beam layout for unorganized scans, and whether azimuth wraps\n"
-      "                     around (360-degree sensors): hdl64, hdl32, vlp16, os1_64, ladar2d\n"
-      "                     (default %s)\n"
-      "  --keep-ground      do not remove the ground first\n"
-      "%s"
-      "  --overwrite        replace existing output files\n"
-      "  -h, --help         this help\n",
-      argv0, d.k, d.floor, d.gap, d.min_size, d.sensor.c_str(), d.ground.help().c_str());
+      "Options (-h, --help: this help):\n%s",
+      argv0, optionTable().help().c_str());
 }
 
 using pcl_movers::tools::labelledBlob;
@@ -164,37 +170,30 @@ int parseCount(const std::string& flag, const std::string& text, int min) {
 }
 
 int run(int argc, char** argv) {
-  std::vector<std::string> with_value = pcl_movers::tools::GroundOptions::flags();
-  for (const char* flag : {"--k", "--floor", "--gap", "--min-size", "--max-size", "--sensor"})
-    with_value.push_back(flag);
-  pcl_movers::tools::checkArguments(argc, argv, {"-h", "--help", "--overwrite", "--keep-ground"},
-                                    with_value);
-  const auto positional = pcl_movers::tools::positionalArguments(argc, argv, with_value);
+  const auto args = optionTable().parse(argc, argv);
+  const auto& positional = args.positional;
   if (positional.size() != 2)
     throw InputError("expected INPUT and OUTPUT, got " + std::to_string(positional.size()) +
                      " argument(s); see -h");
   Options opt;
-  opt.overwrite = pcl::console::find_switch(argc, argv, "--overwrite");
-  opt.keep_ground = pcl::console::find_switch(argc, argv, "--keep-ground");
+  opt.overwrite = args.has("--overwrite");
+  opt.keep_ground = args.has("--keep-ground");
   std::string v;
-  if (pcl::console::parse_argument(argc, argv, "--k", v) >= 0) {
+  if (args.get("--k", v)) {
     opt.k = static_cast<float>(parseNumber("--k", v));
     if (opt.k < 0) throw InputError("--k: must be >= 0, got '" + v + "'");
   }
-  if (pcl::console::parse_argument(argc, argv, "--floor", v) >= 0) {
+  if (args.get("--floor", v)) {
     opt.floor = static_cast<float>(parseNumber("--floor", v));
     if (opt.floor < 0) throw InputError("--floor: must be >= 0, got '" + v + "'");
   }
-  if (pcl::console::parse_argument(argc, argv, "--gap", v) >= 0)
-    opt.gap = parseCount("--gap", v, 0);
-  if (pcl::console::parse_argument(argc, argv, "--min-size", v) >= 0)
-    opt.min_size = parseCount("--min-size", v, 1);
-  if (pcl::console::parse_argument(argc, argv, "--max-size", v) >= 0)
-    opt.max_size = parseCount("--max-size", v, 1);
+  if (args.get("--gap", v)) opt.gap = parseCount("--gap", v, 0);
+  if (args.get("--min-size", v)) opt.min_size = parseCount("--min-size", v, 1);
+  if (args.get("--max-size", v)) opt.max_size = parseCount("--max-size", v, 1);
   if (opt.max_size < opt.min_size) throw InputError("--max-size must be >= --min-size");
-  if (pcl::console::parse_argument(argc, argv, "--sensor", v) >= 0) opt.sensor = v;
+  if (args.get("--sensor", v)) opt.sensor = v;
   pcl_movers::SensorModel::fromName(opt.sensor);  // throws InputError on an unknown name
-  opt.ground.parse(argc, argv);
+  opt.ground.parse(args);
 
   const std::string& input = positional[0];
   const std::string& output = positional[1];

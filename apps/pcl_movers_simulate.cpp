@@ -19,6 +19,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <string>
 
@@ -38,41 +39,38 @@ struct Options {
   bool progress = false;  ///< force the progress bar when stderr is not a terminal
 };
 
-std::string describe(const Options& d) {
-  auto or_scenario = [](bool unset, const std::string& v) {
-    return unset ? std::string("scenario's value") : v;
-  };
-  std::string s;
-  s += "  --frames N      number of frames (default: " +
-       or_scenario(d.frames <= 0, std::to_string(d.frames)) + ")\n";
-  s += "  --seed S        random seed for noise, dropouts, foliage and clutter placement "
-       "(default: " +
-       or_scenario(d.seed < 0, std::to_string(d.seed)) + ")\n";
-  s += "  --sensor NAME   hdl64, hdl32, vlp16, os1_64, ladar2d (default: " +
-       or_scenario(d.sensor.empty(), d.sensor) + ")\n";
+pcl_movers::tools::OptionTable optionTable() {
+  const Options d;
+  const std::string scenario = "the scenario's value";
   std::string families;
   for (const auto& f : pcl_movers::sim::sceneFamilies())
     families += (families.empty() ? "" : ", ") + f;
-  s += "  --family NAME   generate a whole scene of a family instead of reading SCENARIO.yaml:\n"
-       "                  " +
-       families +
-       "; --seed picks the scene (default 1; odd seeds\n"
-       "                  are the corpus's tune half, even seeds its check half), --frames its\n"
-       "                  length (default " +
-       std::to_string(pcl_movers::sim::SceneOptions().frames) + ")\n";
-  s += "  --print-yaml    print the scenario file (generated or read) to stdout and stop\n";
-  s += "  --pcap FILE     also write the scene as a Velodyne packet capture (libpcap file of the\n"
-       "                  sensor's UDP data packets, one turn per frame; hdl32, vlp16 or hdl64;\n"
-       "                  for hdl64 the calibration XML goes beside it as FILE.xml). Reading it\n"
-       "                  back (pcl_movers_organize --pcap) gives the frames to 2 mm / 0.01 deg\n"
-       "                  (default: " +
-       (d.pcap.empty() ? std::string("none") : d.pcap) + ")\n";
-  s += std::string("  --overwrite     replace the sequence in a non-empty OUT_FOLDER (default: ") +
-       (d.overwrite ? "on" : "off") + ")\n";
-  s +=
-      std::string("  --progress      show progress even when stderr is not a terminal (default: ") +
-      (d.progress ? "on" : "off") + ")\n";
-  return s;
+  return pcl_movers::tools::OptionTable(
+      {{"--frames", "N", "number of frames", d.frames <= 0 ? scenario : std::to_string(d.frames)},
+       {"--seed", "S", "random seed for noise, dropouts, foliage and clutter placement",
+        d.seed < 0 ? scenario : std::to_string(d.seed)},
+       {"--sensor", "NAME", "hdl64, hdl32, vlp16, os1_64, ladar2d",
+        d.sensor.empty() ? scenario : d.sensor},
+       {"--family", "NAME",
+        "generate a whole scene of a family instead of reading SCENARIO.yaml:\n" + families +
+            ";\n--seed picks the scene (default 1; odd seeds are the corpus's tune\nhalf, even "
+            "seeds its check half), --frames its length (default " +
+            std::to_string(pcl_movers::sim::SceneOptions().frames) + ")"},
+       {"--print-yaml", "", "print the scenario file (generated or read) to stdout and stop"},
+       {"--pcap", "FILE",
+        "also write the scene as a Velodyne packet capture (libpcap file of the\nsensor's UDP "
+        "data packets, one turn per frame; hdl32, vlp16 or hdl64;\nfor hdl64 the calibration "
+        "XML goes beside it as FILE.xml). Reading it\nback (pcl_movers_organize --pcap) gives the "
+        "frames to 2 mm / 0.01 deg",
+        d.pcap.empty() ? "none" : d.pcap},
+       {"--recording", "",
+        "write the scene as a recording looks: OUT_FOLDER/NNNNNN.bin (KITTI\nfloat32 x y z "
+        "intensity, no-return points left out, labels/ to\nmatch) and poses.tum (TUM: time x y z "
+        "qx qy qz qw) instead of\nframes/*.pcd and poses.txt"},
+       {"--overwrite", "", "replace the sequence in a non-empty OUT_FOLDER",
+        d.overwrite ? "on" : "off"},
+       {"--progress", "", "show progress even when stderr is not a terminal",
+        d.progress ? "on" : "off"}});
 }
 
 void printHelp(const char* prog) {
@@ -86,8 +84,45 @@ void printHelp(const char* prog) {
       "  labels/NNNNNN.label SemanticKITTI labels, one per organized point\n"
       "  poses.txt times.txt objects.txt scenario.yaml\n"
       "The same scenario and seed give byte-identical output.\n\n"
-      "Options:\n%s  -h, --help      this help\n",
-      prog, prog, prog, describe(Options()).c_str());
+      "Options (-h, --help: this help):\n%s",
+      prog, prog, prog, optionTable().help().c_str());
+}
+
+/** --recording: frames/NNNNNN.pcd -> NNNNNN.bin (finite points only, labels/ cut to match),
+ * poses.txt -> poses.tum. */
+void toRecording(const std::string& folder) {
+  namespace fs = std::filesystem;
+  const pcl_movers::io::SequenceReader reader(folder);
+  std::ofstream tum(fs::path(folder) / "poses.tum");
+  tum << "# timestamp x y z qx qy qz qw (sensor -> world)\n";
+  for (std::size_t i = 0; i < reader.size(); ++i) {
+    pcl::PointCloud<pcl::PointXYZI> cloud;
+    reader.read(i, cloud);
+    const fs::path labels_path = fs::path(folder) / "labels" / (reader.frameName(i) + ".label");
+    std::vector<std::uint32_t> labels(cloud.size(), 0);
+    std::ifstream(labels_path, std::ios::binary)
+        .read(reinterpret_cast<char*>(labels.data()), std::streamsize(4 * labels.size()));
+    std::ofstream bin(fs::path(folder) / (reader.frameName(i) + ".bin"), std::ios::binary);
+    std::ofstream label(labels_path, std::ios::binary | std::ios::trunc);
+    for (std::size_t k = 0; k < cloud.size(); ++k) {
+      const auto& p = cloud[k];
+      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
+      const float xyzi[4] = {p.x, p.y, p.z, p.intensity};
+      bin.write(reinterpret_cast<const char*>(xyzi), sizeof(xyzi));
+      label.write(reinterpret_cast<const char*>(&labels[k]), 4);
+    }
+    if (!bin || !label) throw InputError(folder, 0, "cannot write " + reader.frameName(i) + ".bin");
+    const Eigen::Isometry3d pose = reader.pose(i);
+    const Eigen::Quaterniond q(pose.rotation());
+    char line[256];
+    std::snprintf(line, sizeof(line), "%.6f %.6f %.6f %.6f %.9f %.9f %.9f %.9f\n", reader.time(i),
+                  pose.translation().x(), pose.translation().y(), pose.translation().z(), q.x(),
+                  q.y(), q.z(), q.w());
+    tum << line;
+  }
+  if (!tum) throw InputError(folder + "/poses.tum", 0, "cannot write");
+  fs::remove_all(fs::path(folder) / "frames");
+  fs::remove(fs::path(folder) / "poses.txt");
 }
 
 long long parseInteger(const std::string& option, const std::string& value, long long lo,
@@ -110,22 +145,18 @@ int main(int argc, char** argv) {
       printHelp(argv[0]);
       return 0;
     }
-    const std::vector<std::string> with_value = {"--frames", "--seed", "--sensor", "--family",
-                                                 "--pcap"};
-    tools::checkArguments(argc, argv, {"--overwrite", "--progress", "--print-yaml"}, with_value);
-    const auto positional = tools::positionalArguments(argc, argv, with_value);
+    const auto args = optionTable().parse(argc, argv);
+    const auto& positional = args.positional;
     Options opt;
-    for (int i = 1; i + 1 < argc; ++i) {
-      const std::string a = argv[i];
-      if (a == "--frames") opt.frames = int(parseInteger(a, argv[i + 1], 1, 1000000));
-      if (a == "--seed") opt.seed = parseInteger(a, argv[i + 1], 0, (1LL << 53));
-      if (a == "--sensor") opt.sensor = argv[i + 1];
-      if (a == "--family") opt.family = argv[i + 1];
-      if (a == "--pcap") opt.pcap = argv[i + 1];
-    }
-    opt.overwrite = pcl::console::find_switch(argc, argv, "--overwrite");
-    opt.progress = pcl::console::find_switch(argc, argv, "--progress");
-    opt.print_yaml = pcl::console::find_switch(argc, argv, "--print-yaml");
+    std::string v;
+    if (args.get("--frames", v)) opt.frames = int(parseInteger("--frames", v, 1, 1000000));
+    if (args.get("--seed", v)) opt.seed = parseInteger("--seed", v, 0, (1LL << 53));
+    args.get("--sensor", opt.sensor);
+    args.get("--family", opt.family);
+    args.get("--pcap", opt.pcap);
+    opt.overwrite = args.has("--overwrite");
+    opt.progress = args.has("--progress");
+    opt.print_yaml = args.has("--print-yaml");
     const std::size_t wanted = (opt.family.empty() ? 1 : 0) + (opt.print_yaml ? 0 : 1);
     if (positional.size() != wanted) {
       printHelp(argv[0]);
@@ -177,6 +208,7 @@ int main(int argc, char** argv) {
     pcl_movers::sim::writeSequence(simulator, out_folder, opt.overwrite,
                                    [&](std::size_t done, std::size_t) { bar.update(done); });
     bar.finish();
+    if (args.has("--recording")) toRecording(out_folder);
     if (!opt.pcap.empty()) {
       pcl_movers::sim::writeCapture(simulator, opt.pcap, opt.overwrite);
       pcl::console::print_info(

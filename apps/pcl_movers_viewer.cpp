@@ -55,6 +55,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -84,46 +85,55 @@ struct ViewerParameters {
   double arrow_seconds = 1.0;  ///< velocity arrows reach where the object will be after this
   double rate = 10.0;          ///< frame rate when the sequence has no times.txt [Hz]
   bool overwrite = false;
-  bool live = false;   ///< --live: run MoverDetector while playing
-  std::string config;  ///< --config FILE: detector parameters for --live
+  bool live = false;          ///< --live: run MoverDetector while playing
+  std::string config;         ///< --config FILE: detector parameters for --live
+  bool movers_only = false;   ///< --movers-only: only the movers' points, boxes and trails
+  bool point_labels = false;  ///< --point-labels: colour by DIR/labels/*.label (required)
 };
 
-const std::vector<std::string> kFlags = {"-h", "--help", "--ground-truth", "--overwrite", "--live"};
-const std::vector<std::string> kWithValue = {
-    "--detections", "--screenshot-dir", "--frames",        "--size", "--camera", "--format",
-    "--point-size", "--trail",          "--arrow-seconds", "--rate", "--config"};
+tools::OptionTable optionTable() {
+  const ViewerParameters d;
+  return tools::OptionTable(
+      {{"--detections", "DIR",
+        "pcl_movers_detect output: DIR/tracks.csv (boxes, arrows, trails),\nDIR/labelled/*.pcd "
+        "if present (point classes; refused when its\nrun_key.txt or file names do not match "
+        "tracks.csv and SEQUENCE),\nelse DIR/labels/*.label if present (see --point-labels), "
+        "else\npoints inside a track's box take its colour"},
+       {"--point-labels", "",
+        "colour points by DIR/labels/NAME.label (pcl_movers_detect\n--point-labels; SemanticKITTI: "
+        "classes 251-259 movers, track in\nthe high 16 bits) even when DIR/labelled/ exists; "
+        "an error when\nthey are missing. Without it they are used when DIR has no labelled/"},
+       {"--movers-only", "", "draw only the movers: their points, boxes, arrows and trails"},
+       {"--live", "",
+        "run the detector (MoverDetector) while playing instead of reading\n--detections; poses "
+        "from the sequence, else estimated from the scans"},
+       {"--config", "FILE", "detector parameters for --live (pcl_movers_detect --print-config)"},
+       {"--ground-truth", "", "also draw the ground-truth boxes of SEQUENCE/objects.txt (magenta)"},
+       {"--frames", "A:B",
+        "frames to show or render, 0-based inclusive (tracks.csv's `frame`);\nA:, :B, A also "
+        "work",
+        "all"},
+       {"--camera", "NAME", "chase or bird", d.camera},
+       {"--point-size", "PX", "point size in pixels", tools::str(d.point_size)},
+       {"--trail", "N", "trail length in frames, 0 = none", std::to_string(d.trail)},
+       {"--arrow-seconds", "S", "velocity arrows end where the object is S seconds later",
+        tools::str(d.arrow_seconds)},
+       {"--rate", "HZ", "frame rate when there is no times.txt", tools::str(d.rate)},
+       {"--size", "WxH", "window / image size in pixels", d.size},
+       {"", "", "Off-screen mode (no window; works under xvfb-run):"},
+       {"--screenshot-dir", "DIR", "render the frames to DIR/<frame file name>.png and exit"},
+       {"--format", "png|ppm", "image format", d.format},
+       {"--overwrite", "", "allow writing into a non-empty DIR"}});
+}
 
 void printHelp(const char* program) {
-  const ViewerParameters d;
   std::printf(
       "Usage: %s SEQUENCE [options]\n\n"
-      "Plays a LiDAR sequence folder (frames/*.pcd, *.pcd or velodyne/*.bin; poses.txt, "
-      "times.txt,\n"
-      "objects.txt optional) with the tracks of pcl_movers_detect, or renders PNG screenshots.\n\n"
-      "Options:\n"
-      "  --detections DIR      pcl_movers_detect output: DIR/tracks.csv (boxes, arrows, trails) "
-      "and\n"
-      "                        DIR/labelled/*.pcd if present (point classes); else points inside "
-      "a\n"
-      "                        track's box take its colour\n"
-      "  --live                run the detector (MoverDetector) while playing instead of reading\n"
-      "                        --detections; poses from the sequence, else estimated from the "
-      "scans\n"
-      "  --config FILE         detector parameters for --live (pcl_movers_detect --print-config)\n"
-      "  --ground-truth        also draw the ground-truth boxes of SEQUENCE/objects.txt (magenta)\n"
-      "  --frames A:B          frames to show or render, 0-based inclusive; A:, :B, A also work\n"
-      "                        (default: all)\n"
-      "  --camera NAME         chase or bird (default: %s)\n"
-      "  --point-size PX       point size in pixels (default: %g)\n"
-      "  --trail N             trail length in frames, 0 = none (default: %d)\n"
-      "  --arrow-seconds S     velocity arrows end where the object is S seconds later (default: "
-      "%g)\n"
-      "  --rate HZ             frame rate when there is no times.txt (default: %g)\n"
-      "  --size WxH            window / image size in pixels (default: %s)\n"
-      "Off-screen mode (no window; works under xvfb-run):\n"
-      "  --screenshot-dir DIR  render the frames to DIR/NNNNNN.png and exit\n"
-      "  --format png|ppm      image format (default: %s)\n"
-      "  --overwrite           allow writing into a non-empty DIR\n\n"
+      "Plays a LiDAR sequence folder (frames/*.pcd, *.pcd, *.bin or velodyne/*.bin; poses.txt,\n"
+      "times.txt, objects.txt optional) with the tracks of pcl_movers_detect, or renders PNG\n"
+      "screenshots. The overlay shows `frame I/N (file NNNNNN)`: I is tracks.csv's `frame`, the\n"
+      "file number its `file` column.\n\n"
+      "Options (-h, --help: this help):\n%s\n"
       "Keys (interactive mode):\n"
       "  space                 play / pause\n"
       "  right, n / left, p    step one frame forward / back\n"
@@ -135,8 +145,7 @@ void printHelp(const char* program) {
       "Colours: ground dark grey, movers red with orange boxes, arrows and trails; stationary\n"
       "tracks in cool per-track colours; other points grey by height; ground truth magenta;\n"
       "the selected track yellow.\n",
-      program, d.camera.c_str(), d.point_size, d.trail, d.arrow_seconds, d.rate, d.size.c_str(),
-      d.format.c_str());
+      program, optionTable().help().c_str());
 }
 
 double parseNumber(const std::string& option, const std::string& text, double lo, double hi) {
@@ -151,39 +160,31 @@ double parseNumber(const std::string& option, const std::string& text, double lo
 }
 
 ViewerParameters parseParameters(int argc, char** argv, std::string& sequence) {
-  tools::checkArguments(argc, argv, kFlags, kWithValue);
-  const auto positional = tools::positionalArguments(argc, argv, kWithValue);
-  if (positional.size() != 1)
+  const auto args = optionTable().parse(argc, argv);
+  if (args.positional.size() != 1)
     throw InputError("expected exactly one SEQUENCE folder, got " +
-                     std::to_string(positional.size()) + " (see -h)");
-  sequence = positional.front();
+                     std::to_string(args.positional.size()) + " (see -h)");
+  sequence = args.positional.front();
   ViewerParameters p;
-  // The last occurrence wins, as with pcl::console::parse_argument.
-  auto value = [&](const char* option, std::string& out) {
-    bool found = false;
-    for (int i = 1; i < argc; ++i)
-      if (option == std::string(argv[i])) {
-        if (i + 1 >= argc) throw InputError(std::string(option) + ": missing value");
-        out = argv[i + 1];
-        found = true;
-      }
-    return found;
-  };
-  value("--detections", p.detections);
-  value("--screenshot-dir", p.screenshot_dir);
-  value("--frames", p.frames);
-  value("--size", p.size);
-  value("--camera", p.camera);
-  value("--format", p.format);
+  args.get("--detections", p.detections);
+  args.get("--screenshot-dir", p.screenshot_dir);
+  args.get("--frames", p.frames);
+  args.get("--size", p.size);
+  args.get("--camera", p.camera);
+  args.get("--format", p.format);
   std::string v;
-  if (value("--point-size", v)) p.point_size = parseNumber("--point-size", v, 1, 20);
-  if (value("--trail", v)) p.trail = static_cast<int>(parseNumber("--trail", v, 0, 1000));
-  if (value("--arrow-seconds", v)) p.arrow_seconds = parseNumber("--arrow-seconds", v, 0, 60);
-  if (value("--rate", v)) p.rate = parseNumber("--rate", v, 0.01, 1000);
-  p.ground_truth = pcl::console::find_switch(argc, argv, "--ground-truth");
-  p.overwrite = pcl::console::find_switch(argc, argv, "--overwrite");
-  p.live = pcl::console::find_switch(argc, argv, "--live");
-  value("--config", p.config);
+  if (args.get("--point-size", v)) p.point_size = parseNumber("--point-size", v, 1, 20);
+  if (args.get("--trail", v)) p.trail = static_cast<int>(parseNumber("--trail", v, 0, 1000));
+  if (args.get("--arrow-seconds", v)) p.arrow_seconds = parseNumber("--arrow-seconds", v, 0, 60);
+  if (args.get("--rate", v)) p.rate = parseNumber("--rate", v, 0.01, 1000);
+  p.ground_truth = args.has("--ground-truth");
+  p.overwrite = args.has("--overwrite");
+  p.live = args.has("--live");
+  p.movers_only = args.has("--movers-only");
+  p.point_labels = args.has("--point-labels");
+  args.get("--config", p.config);
+  if (p.point_labels && p.detections.empty())
+    throw InputError("--point-labels needs --detections DIR (it reads DIR/labels/)");
   if (p.live && !p.detections.empty())
     throw InputError(
         "--live and --detections exclude each other (live detection makes the tracks)");
@@ -279,12 +280,77 @@ bool readLabelledCloud(const std::string& path, pcl::PointCloud<pcl::PointXYZI>&
   return true;
 }
 
+/** Value of `"key": "..."` in summary.json text, "" when absent. */
+std::string jsonString(const std::string& text, const std::string& key) {
+  const std::string tag = "\"" + key + "\": \"";
+  const std::size_t b = text.find(tag);
+  if (b == std::string::npos) return "";
+  const std::size_t e = text.find('"', b + tag.size());
+  return e == std::string::npos ? "" : text.substr(b + tag.size(), e - b - tag.size());
+}
+
+std::string readText(const fs::path& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+/** Refuses a labelled/ folder that pcl_movers_detect did not write with the tracks.csv beside it
+ * (copied from another run): its run_key.txt must hold summary.json's run_key, and every labelled
+ * cloud must be named as a frame of the sequence. */
+void checkLabelledBelongs(const fs::path& labelled, const fs::path& detections,
+                          const io::SequenceReader& reader) {
+  const std::string summary_key = jsonString(readText(detections / "summary.json"), "run_key");
+  std::error_code ec;
+  if (!summary_key.empty() && fs::exists(labelled / "run_key.txt", ec)) {
+    std::string stamp = readText(labelled / "run_key.txt");
+    stamp.erase(stamp.find_last_not_of(" \n\r") + 1);
+    if (stamp != summary_key)
+      throw InputError(labelled.string(), 0,
+                       "written by another run than " + (detections / "tracks.csv").string() +
+                           " (run_key.txt " + stamp + ", summary.json " + summary_key +
+                           "); run pcl_movers_detect --labelled-clouds again");
+  }
+  std::set<std::string> frames;
+  for (std::size_t i = 0; i < reader.size(); ++i) frames.insert(reader.frameName(i));
+  for (const auto& e : fs::directory_iterator(labelled, ec))
+    if (e.path().extension() == ".pcd" && !frames.count(e.path().stem().string()))
+      throw InputError(e.path().string(), 0,
+                       "is no frame of the sequence: labelled/ belongs to another sequence");
+}
+
+/** Colours from OUT/labels/NAME.label (pcl_movers_detect --point-labels, SemanticKITTI layout:
+ * one uint32 per input point, class in the low 16 bits, 251-259 moving, track id in the high
+ * 16): movers take their track, every other point keeps `labels` but is no mover. */
+void applyPointLabels(const std::string& path, std::size_t points, viz::PointLabels& labels) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, 0, "cannot open point labels");
+  std::vector<std::uint32_t> raw(points);
+  in.read(reinterpret_cast<char*>(raw.data()), std::streamsize(4 * points));
+  if (in.gcount() != std::streamsize(4 * points) || in.peek() != EOF)
+    throw InputError(path, 0,
+                     "expected " + std::to_string(points) +
+                         " labels (one per point of the frame): labels of another sequence?");
+  for (std::size_t k = 0; k < points; ++k) {
+    const std::uint32_t cls = raw[k] & 0xFFFF;
+    if (cls >= 251 && cls <= 259) {
+      labels.classes[k] = viz::PointClass::Mover;
+      labels.track_ids[k] = static_cast<int>(raw[k] >> 16);
+    } else if (labels.classes[k] == viz::PointClass::Mover) {
+      labels.classes[k] = viz::PointClass::Unassigned;
+      labels.track_ids[k] = -1;
+    }
+  }
+}
+
 /** Everything the viewer shows, loaded and validated before any window opens. */
 struct SceneData {
   io::SequenceReader reader;
   viz::TrackIndex tracks;
   bool has_tracks = false;
   std::string labelled_dir;
+  std::string labels_dir;  ///< DIR/labels (SemanticKITTI .label per frame), "" = not used
   std::map<int, std::vector<io::GroundTruthObject>> ground_truth;
   bool has_ground_truth = false;
 };
@@ -313,7 +379,18 @@ void loadScene(const std::string& sequence, const ViewerParameters& p, SceneData
     scene.tracks = viz::TrackIndex(std::move(rows));
     scene.has_tracks = true;
     const fs::path labelled = fs::path(p.detections) / "labelled";
-    if (fs::is_directory(labelled, ec)) scene.labelled_dir = labelled.string();
+    if (fs::is_directory(labelled, ec)) {
+      checkLabelledBelongs(labelled, fs::path(p.detections), scene.reader);
+      scene.labelled_dir = labelled.string();
+    }
+    const fs::path labels = fs::path(p.detections) / "labels";
+    if (fs::is_directory(labels, ec) && (p.point_labels || scene.labelled_dir.empty()))
+      scene.labels_dir = labels.string();
+    if (p.point_labels && scene.labels_dir.empty())
+      throw InputError(labels.string(), 0,
+                       "--point-labels: no such folder (pcl_movers_detect --point-labels writes "
+                       "it)");
+    if (p.point_labels) scene.labelled_dir.clear();
   }
   if (p.ground_truth) {
     const std::string path = scene.reader.objectsPath();
@@ -486,6 +563,11 @@ class FrameRenderer {
       scene_.reader.read(i, cloud);
       const auto ground = viz::estimateGroundMask(cloud);
       labels = viz::labelPointsFromTracks(cloud, ground, rows);
+      const fs::path label_file =
+          fs::path(scene_.labels_dir) / (scene_.reader.frameName(i) + ".label");
+      std::error_code ec;
+      if (!scene_.labels_dir.empty() && fs::exists(label_file, ec))
+        applyPointLabels(label_file.string(), cloud.size(), labels);
     }
     std::vector<int> movers;
     for (const auto& r : rows)
@@ -504,7 +586,8 @@ class FrameRenderer {
       pcl::PointXYZRGB q;
       q.x = p.x, q.y = p.y, q.z = p.z;
       q.r = colors[k].r, q.g = colors[k].g, q.b = colors[k].b;
-      (colors[k] == style_colors_.mover_points ? mover_points : coloured)->push_back(q);
+      const bool mover = colors[k] == style_colors_.mover_points;
+      if (mover || !params_.movers_only) (mover ? mover_points : coloured)->push_back(q);
       ++finite;
     }
     if (finite == 0) print_warn("[%s] frame %zu has no finite points\n", kTool, i);
@@ -527,6 +610,7 @@ class FrameRenderer {
       const bool is_selected = r.track_id == selected_;
       if (is_selected) selected = &r;
       if (r.mover) ++mover_count;
+      if (params_.movers_only && !r.mover && !is_selected) continue;
       const viz::Color box_color = is_selected ? style_colors_.selected
                                    : r.mover   ? style_colors_.mover_box
                                                : viz::trackColor(r.track_id);
@@ -559,9 +643,9 @@ class FrameRenderer {
       extra += (extra.empty() ? "" : "   ") + std::string("track ") + std::to_string(selected_) +
                " not in this frame";
     const double t = scene_.reader.time(i);
-    const std::string text =
-        viz::overlayText(i, scene_.reader.size(), t, mover_count, selected, extra) +
-        (scene_.has_tracks || live_ ? "" : "\n(no --detections: points only)");
+    const std::string text = viz::overlayText(i, scene_.reader.size(), t, mover_count, selected,
+                                              extra, scene_.reader.frameNumber(i)) +
+                             (scene_.has_tracks || live_ ? "" : "\n(no --detections: points only)");
     // VTK anchors multi-line text at its bottom-left corner: place it so the first line sits at
     // the top of the window whatever the number of lines.
     const int text_lines = 1 + static_cast<int>(std::count(text.begin(), text.end(), '\n'));

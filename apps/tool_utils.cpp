@@ -8,6 +8,7 @@
 
 #include <unistd.h>
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -26,39 +27,102 @@ bool isNumber(const std::string& s) {
   return end && *end == '\0' && !s.empty();
 }
 
-bool contains(const std::vector<std::string>& list, const std::string& s) {
-  return std::find(list.begin(), list.end(), s) != list.end();
+std::string kebab(std::string name) {
+  std::replace(name.begin(), name.end(), '_', '-');
+  return name;
 }
 
 }  // namespace
 
-void checkArguments(int argc, char** argv, const std::vector<std::string>& flags,
-                    const std::vector<std::string>& with_value) {
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    if (arg.size() < 2 || arg[0] != '-' || isNumber(arg)) continue;
-    if (contains(with_value, arg)) {
-      if (i + 1 >= argc) throw InputError("option " + arg + " needs a value");
-      ++i;
-      continue;
-    }
-    if (!contains(flags, arg) && arg != "-h" && arg != "--help")
-      throw InputError("unknown option " + arg + " (see -h)");
-  }
+bool Arguments::get(const std::string& name, std::string& value) const {
+  const auto it = given.find(name);
+  if (it == given.end()) return false;
+  value = it->second;
+  return true;
 }
 
-std::vector<std::string> positionalArguments(int argc, char** argv,
-                                             const std::vector<std::string>& with_value) {
-  std::vector<std::string> out;
+double Arguments::number(const std::string& name, double fallback) const {
+  std::string v;
+  return get(name, v) ? parseNumber(name, v) : fallback;
+}
+
+std::vector<std::string> Arguments::all(const std::string& name) const {
+  std::vector<std::string> values;
+  for (const auto& option : list)
+    if (option.first == name) values.push_back(option.second);
+  return values;
+}
+
+void OptionTable::add(const std::vector<Option>& options) {
+  options_.insert(options_.end(), options.begin(), options.end());
+}
+
+const Option* OptionTable::find(const std::string& name) const {
+  for (const auto& o : options_)
+    if (!o.name.empty() && o.name == name) return &o;
+  return nullptr;
+}
+
+Arguments OptionTable::parse(int argc, char** argv) const {
+  Arguments args;
+  const std::string tool = argc > 0 ? fs::path(argv[0]).filename().string() : "tool";
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
-    if (arg.size() >= 2 && arg[0] == '-' && !isNumber(arg)) {
-      if (contains(with_value, arg)) ++i;
+    if (arg.size() < 2 || arg[0] != '-' || isNumber(arg)) {
+      args.positional.push_back(arg);
       continue;
     }
-    out.push_back(arg);
+    if (arg == "-h" || arg == "--help") {
+      args.given["--help"] = "";
+      continue;
+    }
+    const Option* option = find(arg);
+    for (std::size_t k = 0; !option && k < options_.size(); ++k) {
+      const auto& aliases = options_[k].aliases;
+      if (kebab(arg) == options_[k].name ||
+          std::find(aliases.begin(), aliases.end(), arg) != aliases.end())
+        option = &options_[k];
+    }
+    if (!option) throw InputError("unknown option " + arg + " (see -h)");
+    if (arg != option->name)
+      std::fprintf(stderr, "[%s] warning: %s is deprecated, use %s\n", tool.c_str(), arg.c_str(),
+                   option->name.c_str());
+    if (!option->value.empty() && i + 1 >= argc)
+      throw InputError("option " + arg + " needs a value " + option->value);
+    const std::string value = option->value.empty() ? "" : argv[++i];
+    args.given[option->name] = value;
+    args.list.emplace_back(option->name, value);
+  }
+  return args;
+}
+
+std::string OptionTable::help() const {
+  std::size_t width = 0;
+  auto left = [](const Option& o) {
+    return "  " + o.name + (o.value.empty() ? "" : " " + o.value);
+  };
+  for (const auto& o : options_)
+    if (!o.name.empty() && left(o).size() < 34) width = std::max(width, left(o).size());
+  std::string out;
+  for (const auto& o : options_) {
+    if (o.name.empty()) {
+      out += o.help + "\n";
+      continue;
+    }
+    std::string line = left(o);
+    line.resize(std::max(line.size() + 1, width + 2), ' ');
+    std::string text = o.help + (o.def.empty() ? "" : " (default: " + o.def + ")");
+    for (std::size_t nl = text.find('\n'); nl != std::string::npos; nl = text.find('\n', nl + 1))
+      text.insert(nl + 1, width + 2, ' ');
+    out += line + text + "\n";
   }
   return out;
+}
+
+std::string str(double value, int digits) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.*g", digits, value);
+  return text;
 }
 
 std::vector<std::string> listScanInputs(const std::string& file_or_folder) {
@@ -95,26 +159,30 @@ GroundOptions::GroundOptions() {
   sectors = defaults.getNumSectors();
 }
 
-std::vector<std::string> GroundOptions::flags() {
-  return {"--distance", "--tilt-deg", "--sensor-height", "--sectors"};
+std::vector<Option> GroundOptions::options() const {
+  return {
+      {"--distance", "M", "ground if within M metres of its cell's plane", str(distance)},
+      {"--tilt-deg", "D", "steepest plane taken for ground [deg]", str(tilt_deg, 3)},
+      {"--sensor-height", "M", "sensor height above the ground under it [m]", str(sensor_height)},
+      {"--sectors", "N", "azimuth sectors of the polar cells", std::to_string(sectors)}};
 }
 
-void GroundOptions::parse(int argc, char** argv) {
+void GroundOptions::parse(const Arguments& args) {
   std::string v;
-  if (pcl::console::parse_argument(argc, argv, "--distance", v) >= 0) {
+  if (args.get("--distance", v)) {
     distance = static_cast<float>(parseNumber("--distance", v));
     if (!(distance > 0)) throw InputError("--distance: must be > 0, got '" + v + "'");
   }
-  if (pcl::console::parse_argument(argc, argv, "--tilt-deg", v) >= 0) {
+  if (args.get("--tilt-deg", v)) {
     tilt_deg = static_cast<float>(parseNumber("--tilt-deg", v));
     if (tilt_deg < 0 || tilt_deg >= 90)
       throw InputError("--tilt-deg: must be in [0, 90), got '" + v + "'");
   }
-  if (pcl::console::parse_argument(argc, argv, "--sensor-height", v) >= 0) {
+  if (args.get("--sensor-height", v)) {
     sensor_height = static_cast<float>(parseNumber("--sensor-height", v));
     if (sensor_height < 0) throw InputError("--sensor-height: must be >= 0, got '" + v + "'");
   }
-  if (pcl::console::parse_argument(argc, argv, "--sectors", v) >= 0) {
+  if (args.get("--sectors", v)) {
     const double s = parseNumber("--sectors", v);
     if (s < 1 || s > 4096 || s != std::floor(s))
       throw InputError("--sectors: expected an integer in 1..4096, got '" + v + "'");
@@ -127,17 +195,6 @@ void GroundOptions::applyTo(GroundPlaneFilter<pcl::PointXYZI>& filter) const {
   filter.setMaxTilt(tilt_deg * float(M_PI) / 180.f);
   filter.setSensorHeight(sensor_height);
   filter.setNumSectors(sectors);
-}
-
-std::string GroundOptions::help() const {
-  char text[512];
-  std::snprintf(text, sizeof(text),
-                "  --distance M       ground if within M metres of its cell's plane (default %g)\n"
-                "  --tilt-deg D       steepest plane taken for ground [deg] (default %.3g)\n"
-                "  --sensor-height M  sensor height above the ground under it [m] (default %g)\n"
-                "  --sectors N        azimuth sectors of the polar cells (default %d)\n",
-                distance, tilt_deg, sensor_height, sectors);
-  return text;
 }
 
 pcl::PointCloud<pcl::PointXYZI>::Ptr readScanChecked(const std::string& path) {
@@ -191,13 +248,23 @@ void labelledBlob(const pcl::PointCloud<pcl::PointXYZI>& cloud,
 void writeAtomically(const std::string& path,
                      const std::function<int(pcl::PCDWriter&, const std::string&)>& write) {
   const std::string tmp = path + ".tmp";
-  pcl::PCDWriter writer;
-  if (write(writer, tmp) != 0) {
-    std::error_code ec;
-    fs::remove(tmp, ec);
-    throw InputError(path, 0, "cannot write");
-  }
+  const fs::path folder = fs::path(path).parent_path();
   std::error_code ec;
+  if (!folder.empty() && !fs::is_directory(folder, ec))
+    throw InputError(path, 0, "cannot write: no folder " + folder.string());
+  pcl::PCDWriter writer;
+  int status = -1;
+  std::string why;
+  errno = 0;
+  try {  // PCL throws "Error during open!" naming no file: name it here
+    status = write(writer, tmp);
+  } catch (const std::exception& e) {
+    why = std::string(" (") + (errno ? std::strerror(errno) : e.what()) + ")";
+  }
+  if (status != 0) {
+    fs::remove(tmp, ec);
+    throw InputError(path, 0, "cannot write" + why);
+  }
   fs::rename(tmp, path, ec);
   if (ec) {
     fs::remove(tmp, ec);

@@ -17,6 +17,7 @@
 #include <cstdint>
 #include <exception>
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -32,16 +33,51 @@ inline bool wantsHelp(int argc, char** argv) {
          pcl::console::find_switch(argc, argv, "--help");
 }
 
-/** \brief Rejects any argument starting with '-' that is not in `known` (flags and options,
- * e.g. {"-h", "--rate", "--overwrite"}) — unknown flags are an error, not silently ignored.
- * Option values (the argument after an option in `with_value`) are skipped. Negative numbers
- * given as values are fine. Throws InputError. */
-void checkArguments(int argc, char** argv, const std::vector<std::string>& flags,
-                    const std::vector<std::string>& with_value);
+/** \brief One command-line option of a tool's OptionTable. */
+struct Option {
+  std::string name;   ///< --kebab-case; "" makes `help` a heading line of the help text
+  std::string value;  ///< name of its value in the help ("M", "FILE"); "" = a flag
+  std::string help;   ///< what it does; '\n' continues on an indented line
+  std::string def;    ///< default shown in the help; "" = none
+  std::vector<std::string> aliases = {};  ///< older spellings, accepted with a warning
+};
 
-/** \brief Positional arguments (not options nor option values), in order. */
-std::vector<std::string> positionalArguments(int argc, char** argv,
-                                             const std::vector<std::string>& with_value);
+/** \brief The arguments a tool was given (OptionTable::parse()): options by their name. */
+struct Arguments {
+  std::vector<std::string> positional;       ///< in order
+  std::map<std::string, std::string> given;  ///< option -> value (the last one; "" for flags)
+  std::vector<std::pair<std::string, std::string>> list;  ///< every option given, in order
+  bool has(const std::string& name) const { return given.count(name) > 0; }
+  /** \brief Sets `value` to the option's value when it was given. */
+  bool get(const std::string& name, std::string& value) const;
+  /** \brief The finite number given to `name` (InputError naming it otherwise), or `fallback`. */
+  double number(const std::string& name, double fallback) const;
+  /** \brief Every value given to `name`, in order (a repeatable option). */
+  std::vector<std::string> all(const std::string& name) const;
+};
+
+/** \brief A tool's options, declared once: the argument check, the split into options and
+ * positional arguments and the help text all come from it, so the help cannot drift from what
+ * the tool accepts. -h/--help is always accepted. Spellings with '_' for '-' (--sensor_height)
+ * and an option's aliases are accepted with a deprecation warning on stderr. */
+class OptionTable {
+ public:
+  explicit OptionTable(std::vector<Option> options = {}) : options_(std::move(options)) {}
+  void add(Option option) { options_.push_back(std::move(option)); }
+  void add(const std::vector<Option>& options);
+  /** \brief Splits argv; an unknown option or one without its value throws InputError naming
+   * it. Negative numbers are positional arguments or values. */
+  Arguments parse(int argc, char** argv) const;
+  /** \brief "  --name VALUE  help (default: X)" lines, aligned. */
+  std::string help() const;
+
+ private:
+  const Option* find(const std::string& name) const;
+  std::vector<Option> options_;
+};
+
+/** \brief A number as the help shows it (%g, `digits` significant digits). */
+std::string str(double value, int digits = 6);
 
 /** \brief Input scans of a tool that takes "file or folder": a single .pcd/.bin/.ply file, or the
  * frames of a sequence folder (see io::SequenceReader), sorted numerically. Throws InputError. */
@@ -80,12 +116,10 @@ struct GroundOptions {
   int sectors;          ///< --sectors N: azimuth sectors of the polar cells
 
   GroundOptions();  ///< the filter's defaults
-  /** \brief The options above (each takes a value), for checkArguments(). */
-  static std::vector<std::string> flags();
-  /** \brief Reads the options present in argv; throws InputError naming the flag. */
-  void parse(int argc, char** argv);
-  /** \brief Help lines for the options, with these values as defaults. */
-  std::string help() const;
+  /** \brief The options above, with these values as defaults, for a tool's OptionTable. */
+  std::vector<Option> options() const;
+  /** \brief Reads the options given; throws InputError naming the option. */
+  void parse(const Arguments& args);
   /** \brief Sets these options on a filter (the tools work on PointXYZI; kept out of this
    * header so the tools that do not remove ground need not parse the filter's templates). */
   void applyTo(GroundPlaneFilter<pcl::PointXYZI>& filter) const;

@@ -48,8 +48,8 @@ run() {
     { echo "error: pcl_movers_eval failed on $set ($mode):" >&2; cat "$work/$set.$mode.err" >&2; exit 1; }
   if [ -f "$seq/labels_kitti_tracking.txt" ]; then  # the same detections, DontCare rows counted
     "$EVAL" "$seq/objects.txt" "$out/tracks.csv" --sequence "$seq" --sector-deg "$sector" \
-      --no-dontcare --json "$work/$set.$mode.counted.json" >/dev/null 2>"$work/$set.$mode.err" ||
-      { echo "error: pcl_movers_eval --no-dontcare failed on $set ($mode):" >&2; cat "$work/$set.$mode.err" >&2; exit 1; }
+      --no-dont-care --json "$work/$set.$mode.counted.json" >/dev/null 2>"$work/$set.$mode.err" ||
+      { echo "error: pcl_movers_eval --no-dont-care failed on $set ($mode):" >&2; cat "$work/$set.$mode.err" >&2; exit 1; }
   fi
   rm -rf "$out"
 }

@@ -19,6 +19,7 @@ void FreeSpaceMap::setResolution(double azimuth_deg, double elevation_deg) {
   cols_ = static_cast<int>(std::ceil(360.0f / az_res_deg_));
   rows_ = static_cast<int>(std::ceil((max_el_deg_ - min_el_deg_) / el_res_deg_));
   scans_.clear();  // stored images have the old layout
+  indexBeamRows();
 }
 
 void FreeSpaceMap::computeCells(const float* xs, const float* ys, const float* zs, std::size_t n,
@@ -59,33 +60,45 @@ void FreeSpaceMap::computeCells(const float* xs, const float* ys, const float* z
 void FreeSpaceMap::addBlindScan() {
   if (scans_.size() >= static_cast<std::size_t>(history_)) scans_.pop_back();
   scans_.emplace_front();
+  indexBeamRows();
 }
 
 bool FreeSpaceMap::passesOverGround(float sin_elevation) const {
   return sensor_height_ <= 0 || -sin_elevation * no_return_range_ <= sensor_height_;
 }
 
-void FreeSpaceMap::indexSampledRows(Scan& scan) const {
-  scan.sampled_below.assign(static_cast<std::size_t>(rows_), -1);
-  scan.sampled_above.assign(static_cast<std::size_t>(rows_), rows_);
+bool FreeSpaceMap::rowPassesOverGround(int row) const {
+  if (sensor_height_ <= 0) return true;  // geometry unknown: no ray is known to be lost
+  const double el = (min_el_deg_ + (row + 1) * el_res_deg_) * M_PI / 180.0;  // its highest ray
+  return passesOverGround(static_cast<float>(std::sin(el)));
+}
+
+void FreeSpaceMap::indexBeamRows() {
+  const auto rows = static_cast<std::size_t>(rows_);
+  beam_rows_.assign(rows, 0);
+  for (const Scan& scan : scans_)
+    for (std::size_t r = 0; r < scan.sampled_rows.size() && r < rows; ++r)
+      beam_rows_[r] |= scan.sampled_rows[r];
+  beam_below_.assign(rows, -1);
+  beam_above_.assign(rows, rows_);
   int last = -1;
   for (int r = 0; r < rows_; ++r) {
-    scan.sampled_below[static_cast<std::size_t>(r)] = last;
-    if (scan.sampled_rows[static_cast<std::size_t>(r)]) last = r;
+    beam_below_[static_cast<std::size_t>(r)] = last;
+    if (beam_rows_[static_cast<std::size_t>(r)]) last = r;
   }
   last = rows_;
   for (int r = rows_ - 1; r >= 0; --r) {
-    scan.sampled_above[static_cast<std::size_t>(r)] = last;
-    if (scan.sampled_rows[static_cast<std::size_t>(r)]) last = r;
+    beam_above_[static_cast<std::size_t>(r)] = last;
+    if (beam_rows_[static_cast<std::size_t>(r)]) last = r;
   }
 }
 
-void FreeSpaceMap::windowRows(const Scan& scan, int row, int& lo, int& hi) const {
+void FreeSpaceMap::windowRows(int row, int& lo, int& hi) const {
   lo = row - win_rows_;
   hi = row + win_rows_;
-  if (row >= 0 && row < rows_) {
-    const int below = scan.sampled_below[static_cast<std::size_t>(row)];
-    const int above = scan.sampled_above[static_cast<std::size_t>(row)];
+  if (row >= 0 && row < rows_ && static_cast<std::size_t>(rows_) == beam_below_.size()) {
+    const int below = beam_below_[static_cast<std::size_t>(row)];
+    const int above = beam_above_[static_cast<std::size_t>(row)];
     if (below >= 0 && row - below <= kMaxBeamGapRows) lo = std::min(lo, below);
     if (above < rows_ && above - row <= kMaxBeamGapRows) hi = std::max(hi, above);
   }
@@ -109,25 +122,35 @@ FreeSpaceMap::Evidence FreeSpaceMap::test(const std::vector<Eigen::Vector3f>& wo
     // Nearest return over the window: a ray that passed just beside an edge never counts.
     float nearest = 0.0f;
     int lo = 0, hi = -1;
-    windowRows(s, row, lo, hi);
-    bool beam = false;  // a beam was cast at one of the window's elevations
+    windowRows(row, lo, hi);
+    bool beam = false;  // one of the window's rows is a beam of the sensor
+    bool lost = false;  // a beam cell there should have returned (the ground) but did not
     for (int r = lo; r <= hi; ++r) {
-      if (!s.sampled_rows[static_cast<std::size_t>(r)]) continue;
+      if (!beam_rows_[static_cast<std::size_t>(r)]) continue;
       beam = true;
+      const bool steep = !rowPassesOverGround(r);
       for (int dc = -win_cols_; dc <= win_cols_; ++dc) {
         int c = col + dc;
         c = c >= cols_ ? c - cols_ : (c < 0 ? c + cols_ : c);
         const float v = s.range[static_cast<std::size_t>(r) * cols_ + c];
         if (v > 0.0f && (nearest == 0.0f || v < nearest)) nearest = v;
+        lost = lost || (v == 0.0f && steep);
       }
     }
+    // A lost return may have been something closer than the sensor's minimum range, right in
+    // front of the point: what the other rays saw says nothing then.
+    if (lost) continue;
     // Nothing returned around there: unknown, unless the direction points down and a beam was
     // cast there (see setNoReturnRange()).
-    if (nearest == 0.0f && q.z() < 0.0f && beam && passesOverGround(q.z() / d))
+    const float margin = static_cast<float>(std::max(margin_, margin_per_metre_ * d));
+    // Not within the sensor's minimum range of that scan either: a return closer than the
+    // shortest one reported would not have been reported (a van beside the path, closer than a
+    // 3 m minimum range, was silent and "seen through").
+    if (nearest == 0.0f && q.z() < 0.0f && beam && passesOverGround(q.z() / d) &&
+        d > s.min_range + margin)
       nearest = static_cast<float>(no_return_range_);
     if (nearest == 0.0f) continue;
     ++e.tested;
-    const float margin = static_cast<float>(std::max(margin_, margin_per_metre_ * d));
     if (nearest > d + margin) ++e.seen_through;
   }
   return e;

@@ -48,9 +48,14 @@
 #include <string>
 #include <vector>
 
+#include "test_util.h"
+
 namespace fs = std::filesystem;
 
 namespace {
+
+using test_util::readFile;
+using test_util::writeFile;
 
 enum class Expect { kFail, kEither, kPass };
 
@@ -68,18 +73,6 @@ struct RunResult {
   bool timed_out = false;
   std::string out, err;
 };
-
-std::string readFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-void writeFile(const std::string& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out << text;
-}
 
 std::string lower(std::string s) {
   std::transform(s.begin(), s.end(), s.begin(),
@@ -721,35 +714,33 @@ TEST_F(BadInputs, OrganizeCapture) {
     return Row{name, args + " " + quote(dst), e, std::move(keys), dst};
   };
   const std::string pcap = "--pcap " + quote(in("good.pcap"));
-  check("organize", {
-                        row("good capture (control)", pcap, Expect::kPass, {}),
-                        row("good capture, sensor given (control)", pcap + " --sensor vlp16",
-                            Expect::kPass, {}),
-                        row("missing capture", "--pcap " + quote(in("missing.pcap")), Expect::kFail,
-                            {"missing.pcap: does not exist"}),
-                        row("not a pcap", "--pcap " + quote(in("not_a_capture.pcap")),
-                            Expect::kFail, {"not_a_capture.pcap: not a pcap"}),
-                        row("a PCD given as capture", "--pcap " + quote(good_frame_), Expect::kFail,
-                            {"000000.pcd: not a pcap"}),
-                        row("no full sweep", "--pcap " + quote(in("short.pcap")), Expect::kFail,
-                            {"short.pcap: no full sweep"}),
-                        row("unknown sensor", pcap + " --sensor hdl999", Expect::kFail,
-                            {"unknown velodyne sensor 'hdl999'"}),
-                        row("wrong sensor", pcap + " --sensor hdl32", Expect::kFail,
-                            {"good.pcap: is a vlp-16 capture"}),
-                        row("hdl64 without calibration", pcap + " --sensor hdl64", Expect::kFail,
-                            {"--calibration"}),
-                        row("missing calibration",
-                            pcap + " --sensor hdl64 --calibration " + quote(in("missing.xml")),
-                            Expect::kFail, {"missing.xml"}),
-                        row("calibration not XML",
-                            pcap + " --sensor hdl64 --calibration " + quote(in("garbage.yaml")),
-                            Expect::kFail, {"garbage.yaml"}),
-                        row("non-empty output folder", pcap, Expect::kFail,
-                            {"not empty", "exists", "--overwrite"}, dir_ + "/existing_out"),
-                        row("output below a regular file", pcap, Expect::kFail,
-                            {"cannot", "not a directory", "a_file"}, in("a_file") + "/capture"),
-                    });
+  check(
+      "organize",
+      {
+          row("good capture (control)", pcap, Expect::kPass, {}),
+          row("good capture, sensor given (control)", pcap + " --sensor vlp16", Expect::kPass, {}),
+          row("missing capture", "--pcap " + quote(in("missing.pcap")), Expect::kFail,
+              {"missing.pcap: does not exist"}),
+          row("not a pcap", "--pcap " + quote(in("not_a_capture.pcap")), Expect::kFail,
+              {"not_a_capture.pcap: not a pcap"}),
+          row("a PCD given as capture", "--pcap " + quote(good_frame_), Expect::kFail,
+              {"000000.pcd: not a pcap"}),
+          row("no full sweep", "--pcap " + quote(in("short.pcap")), Expect::kFail,
+              {"short.pcap: no full sweep"}),
+          row("unknown sensor", pcap + " --sensor hdl999", Expect::kFail,
+              {"unknown velodyne sensor 'hdl999'"}),
+          row("wrong sensor", pcap + " --sensor hdl32", Expect::kFail,
+              {"good.pcap: is a vlp-16 capture"}),
+          row("hdl64 without calibration", pcap + " --sensor hdl64", Expect::kFail, {"--calib"}),
+          row("missing calibration", pcap + " --sensor hdl64 --calib " + quote(in("missing.xml")),
+              Expect::kFail, {"missing.xml"}),
+          row("calibration not XML", pcap + " --sensor hdl64 --calib " + quote(in("garbage.yaml")),
+              Expect::kFail, {"garbage.yaml"}),
+          row("non-empty output folder", pcap, Expect::kFail,
+              {"not empty", "exists", "--overwrite"}, dir_ + "/existing_out"),
+          row("output below a regular file", pcap, Expect::kFail,
+              {"cannot", "not a directory", "a_file"}, in("a_file") + "/capture"),
+      });
 }
 
 TEST_F(BadInputs, EgoMotion) {

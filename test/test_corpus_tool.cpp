@@ -14,20 +14,17 @@
 #include <sstream>
 #include <string>
 
+#include "test_util.h"
+
 namespace fs = std::filesystem;
 
 namespace {
 
+using test_util::readFile;
+
 std::string tool(const std::string& name) {
   const char* dir = std::getenv("PCL_MOVERS_TOOLS_DIR");
   return std::string(dir && *dir ? dir : PCL_MOVERS_BINARY_DIR "/apps") + "/pcl_movers_" + name;
-}
-
-std::string readFile(const fs::path& path) {
-  std::ifstream in(path);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
 }
 
 /** The per-run JSON lines without their wall times. */

@@ -35,21 +35,14 @@
 #include <thread>
 #include <vector>
 
+#include "test_util.h"
+
 namespace fs = std::filesystem;
 
 namespace {
 
-std::string readFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-void writeFile(const std::string& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out << text;
-}
+using test_util::readFile;
+using test_util::writeFile;
 
 std::string toolPath() {
   return PCL_MOVERS_BINARY_DIR "/apps/pcl_movers_detect";
@@ -152,7 +145,7 @@ class DetectTool : public ::testing::Test {
       EXPECT_EQ(readFile(e.path().string()), readFile(out + "/labelled/" + name)) << name;
       ++n;
     }
-    EXPECT_EQ(n, 30u);
+    EXPECT_EQ(n, 31u);  // 30 clouds and run_key.txt (the same run key: the same run)
     std::size_t m = 0;
     for (const auto& e : fs::directory_iterator(out + "/labelled")) m += e.is_regular_file();
     EXPECT_EQ(m, n) << "extra files in " << out << "/labelled";
@@ -451,9 +444,15 @@ TEST_F(DetectTool, FileNumbersPerPointAlignmentAndTracksJson) {
 
   std::vector<std::string> names;
   for (const auto& e : fs::directory_iterator(out + "/labelled"))
-    names.push_back(e.path().filename().string());
+    if (e.path().extension() == ".pcd") names.push_back(e.path().filename().string());
   std::sort(names.begin(), names.end());
   ASSERT_EQ(names.size(), 10u);
+  // The run that wrote them, for pcl_movers_viewer's check: summary.json's run_key.
+  std::string stamp = readFile(out + "/labelled/run_key.txt");
+  ASSERT_FALSE(stamp.empty());
+  stamp.pop_back();
+  EXPECT_NE(readFile(out + "/summary.json").find("\"run_key\": \"" + stamp + "\""),
+            std::string::npos);
   EXPECT_EQ(names.front(), "000040.pcd");
   EXPECT_EQ(names.back(), "000049.pcd");
 

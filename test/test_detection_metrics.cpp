@@ -513,7 +513,7 @@ TEST(EvalTool, DontCareFlagsAndErrors) {
             "0 -1 DontCare -1 -1 -10 55 40 65 60 -1000 -1000 -1000 -10 -1 -1 -1\n");
   const std::string base = (dir / "objects.txt").string() + " " + (dir / "tracks.csv").string();
   const std::string flags =
-      " --dontcare " + (dir / "labels.txt").string() + " --calib " + (dir / "calib.txt").string();
+      " --dont-care " + (dir / "labels.txt").string() + " --calib " + (dir / "calib.txt").string();
   std::string out;
   ASSERT_EQ(runTool(base + flags + " --json " + (dir / "s.json").string(), &out), 0) << out;
   EXPECT_NE(out.find("0 in 1 frames, 0 on static objects; 1 rows in KITTI DontCare regions "
@@ -527,18 +527,18 @@ TEST(EvalTool, DontCareFlagsAndErrors) {
   EXPECT_NE(out.find("(1 in 1 frames, 0 on static objects)"), std::string::npos) << out;
 
   // One of the pair, contradicting switches, malformed files: non-zero exit naming the problem.
-  EXPECT_NE(runTool(base + " --dontcare " + (dir / "labels.txt").string(), &out), 0);
-  EXPECT_NE(out.find("--dontcare needs --calib"), std::string::npos) << out;
-  EXPECT_NE(runTool(base + flags + " --no-dontcare", &out), 0);
-  EXPECT_NE(out.find("--no-dontcare contradicts"), std::string::npos) << out;
+  EXPECT_NE(runTool(base + " --dont-care " + (dir / "labels.txt").string(), &out), 0);
+  EXPECT_NE(out.find("--dont-care needs --calib"), std::string::npos) << out;
+  EXPECT_NE(runTool(base + flags + " --no-dont-care", &out), 0);
+  EXPECT_NE(out.find("--no-dont-care contradicts"), std::string::npos) << out;
   writeFile(dir / "bad_calib.txt", "P2: 100 0 50\n");
-  EXPECT_NE(runTool(base + " --dontcare " + (dir / "labels.txt").string() + " --calib " +
+  EXPECT_NE(runTool(base + " --dont-care " + (dir / "labels.txt").string() + " --calib " +
                         (dir / "bad_calib.txt").string(),
                     &out),
             0);
   EXPECT_NE(out.find("bad_calib.txt:1: P2: expected 12 numbers"), std::string::npos) << out;
   writeFile(dir / "bad_labels.txt", "0 -1 DontCare -1 -1 -10 55 40 65\n");
-  EXPECT_NE(runTool(base + " --dontcare " + (dir / "bad_labels.txt").string() + " --calib " +
+  EXPECT_NE(runTool(base + " --dont-care " + (dir / "bad_labels.txt").string() + " --calib " +
                         (dir / "calib.txt").string(),
                     &out),
             0);
@@ -547,7 +547,7 @@ TEST(EvalTool, DontCareFlagsAndErrors) {
 }
 
 // With --sequence on the real KITTI folder its labels and calib are used by default (said on
-// stderr); --no-dontcare counts the row in frame 0's DontCare box as a false alarm again.
+// stderr); --no-dont-care counts the row in frame 0's DontCare box as a false alarm again.
 TEST(EvalTool, SequenceFolderDontCareByDefault) {
   if (!fs::exists(toolPath())) GTEST_SKIP() << "pcl_movers_eval not built at " << toolPath();
   const std::string seq = std::string(PCL_MOVERS_SHARED_DATA) + "/kitti-tracking-0000-a";
@@ -569,7 +569,7 @@ TEST(EvalTool, SequenceFolderDontCareByDefault) {
                      "rows in KITTI DontCare regions ignored) |"),
             std::string::npos)
       << out;
-  ASSERT_EQ(runTool(base + " --no-dontcare", &out), 0) << out;
+  ASSERT_EQ(runTool(base + " --no-dont-care", &out), 0) << out;
   EXPECT_EQ(out.find("DontCare"), std::string::npos) << out;
   EXPECT_NE(out.find("(1 in 77 frames, 0 on static objects) |"), std::string::npos) << out;
   fs::remove_all(dir);

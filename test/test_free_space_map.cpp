@@ -34,11 +34,18 @@ struct Scan {
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
 };
 
-Scan castScan(const Eigen::Vector2d& ego, const std::vector<Box>& boxes, double max_range = 100) {
+/** Elevations of the cast rays [deg]: dense (HDL-64E-like, the default) or sparse (VLP-16). */
+struct Beams {
+  double min_deg = -24.0, max_deg = 2.0, step_deg = 0.4;
+  double min_range = 0.0;  ///< returns closer are dropped (no return), as real sensors do
+};
+
+Scan castScan(const Eigen::Vector2d& ego, const std::vector<Box>& boxes, double max_range = 100,
+              const Beams& beams = Beams()) {
   Scan scan;
   const Eigen::Vector3d origin(ego.x(), ego.y(), 1.73);
   scan.pose.translation() = origin;
-  for (double el = -24.0; el <= 2.0; el += 0.4) {
+  for (double el = beams.min_deg; el <= beams.max_deg + 1e-9; el += beams.step_deg) {
     for (double az = -180.0; az < 180.0; az += 0.2) {
       const double e = el * M_PI / 180, a = az * M_PI / 180;
       const Eigen::Vector3d dir(std::cos(e) * std::cos(a), std::cos(e) * std::sin(a), std::sin(e));
@@ -68,7 +75,7 @@ Scan castScan(const Eigen::Vector2d& ego, const std::vector<Box>& boxes, double 
           hit = static_cast<int>(b);
         }
       }
-      if (best > max_range) continue;  // no return
+      if (best > max_range || best < beams.min_range) continue;  // no return
       const Eigen::Vector3d p = best * dir;
       scan.sensor_points->push_back(pcl::PointXYZ(float(p.x()), float(p.y()), float(p.z())));
       scan.hit_box.push_back(hit);
@@ -170,6 +177,55 @@ TEST(FreeSpaceMap, NoReturnBelowTheSensorCountsAsSeenEmptyUpToTheNoReturnRange) 
       EXPECT_GE(car.seen_through, 10);  // of the car's 21 points
       EXPECT_GT(car.fraction(), 0.5);
     }
+  }
+}
+
+TEST(FreeSpaceMap, PointsBetweenSparseBeamsAreJudgedByTheBeamsAroundThem) {
+  // A VLP-16-like sensor (2° between beams) passes a parked van 2.5 m beside its path. The van's
+  // points, tested against earlier scans, fall between that scan's beams: a fixed ±0.4° window
+  // compared them with the beam passing over the roof (far) and not with the beam hitting the
+  // van just below, and the van was "seen through". Both neighbouring beams are compared now.
+  const Beams sparse{-15.0, 15.0, 2.0, 0.0};
+  std::vector<Scan> scans;
+  for (int f = 0; f <= 5; ++f)
+    scans.push_back(castScan(Eigen::Vector2d(-3.0 + 0.5 * f, 0), {{{0, 2.5 + 0.9}, 5.0, 1.8, 2.0}},
+                             80.0, sparse));
+  pcl_movers::FreeSpaceMap map;
+  map.setHistory(6);
+  for (const auto& scan : scans) map.addScan(*scan.sensor_points, scan.pose);
+  const auto points = worldPointsOf(scans.back(), 0);
+  ASSERT_GT(points.size(), 50u);
+  for (int lag = 1; lag <= 5; ++lag) {
+    const auto e = map.test(points, lag);
+    EXPECT_GT(e.tested, 0) << "lag " << lag;
+    EXPECT_EQ(e.seen_through, 0) << "lag " << lag;
+  }
+}
+
+TEST(FreeSpaceMap, SilentSteepRayIsUnknownGivenTheSensorHeight) {
+  // A parked van 2.2 m beside the path of a sensor whose minimum range is 3 m: its near side
+  // returns nothing. Those silent rays point down steeply, where the ground would have returned
+  // well within range, so they say nothing about the space they cross. Without the sensor height
+  // every silent downward ray counted as seen empty, and the van was seen through.
+  const Beams near_blind{-24.0, 2.0, 0.4, 3.0};
+  std::vector<Scan> scans;
+  for (int f = 0; f <= 5; ++f)
+    scans.push_back(castScan(Eigen::Vector2d(-4.0 + 0.8 * f, 0), {{{0, 2.2 + 0.9}, 5.0, 1.8, 2.0}},
+                             80.0, near_blind));
+  for (const double height : {0.0, 1.73}) {
+    pcl_movers::FreeSpaceMap map;
+    map.setHistory(6);
+    map.setNoReturnRange(80.0);
+    map.setSensorHeight(height);
+    for (const auto& scan : scans) map.addScan(*scan.sensor_points, scan.pose);
+    const auto points = worldPointsOf(scans.back(), 0);
+    ASSERT_FALSE(points.empty());
+    int seen_through = 0;
+    for (int lag = 1; lag <= 5; ++lag) seen_through += map.test(points, lag).seen_through;
+    if (height > 0)
+      EXPECT_EQ(seen_through, 0);
+    else
+      EXPECT_GT(seen_through, 0);  // what the sensor height guards against
   }
 }
 
@@ -459,4 +515,32 @@ TEST(FreeSpaceMap, FreeSpaceVotesAccumulateWithTheSpeedVotes) {
   const int first = firstTrue(mover);
   EXPECT_GE(first, 3);  // never before mover_min_age updates
   EXPECT_LE(first, 4);
+}
+
+TEST(FreeSpaceMap, SlowWalkerBesideAWallBecomesAMoverAndAStandingOneDoesNot) {
+  // A person walking at 0.6 m/s (half of mover_speed) 0.3 m in front of a wall, 12 m from the
+  // parked ego: the sustained-motion test (a line over slow_window = 1.5 s) with free-space
+  // evidence over free_space_long_lag makes it a mover within 2 s of its first view. The
+  // same person standing still is never one, nor is the walker with the test off.
+  for (const double speed : {0.6, 0.0}) {
+    for (const double window : {1.5, 0.0}) {
+      auto scene = [speed](int f, Eigen::Vector2d& ego) {
+        ego = Eigen::Vector2d(0, 0);
+        return std::vector<Box>{{{12.0, -3.0 + speed * 0.1 * f}, 0.4, 0.5, 1.75},
+                                {{12.0 + 0.2 + 0.3 + 0.1, 0}, 0.2, 20.0, 2.5}};
+      };
+      auto all = [](int, const Eigen::Vector3f&) { return true; };
+      pcl_movers::DetectorParameters params;
+      params.slow_window = window;
+      const auto mover = runTracker(params, true, 40, scene, all);
+      SCOPED_TRACE("speed " + std::to_string(speed) + ", slow window " + std::to_string(window));
+      if (speed > 0 && window > 0) {
+        const int first = firstTrue(mover);
+        EXPECT_GE(first, 0);
+        EXPECT_LE(first, 20);  // 16 today: a line over >= 1.1 s, then two long-lag votes
+      } else {
+        EXPECT_EQ(count(mover), 0);
+      }
+    }
+  }
 }

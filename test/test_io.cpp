@@ -15,31 +15,15 @@
 #include <fstream>
 #include <limits>
 
+#include "test_util.h"
+
 namespace fs = std::filesystem;
 using namespace pcl_movers;
 
 namespace {
 
-class TempDir {
- public:
-  TempDir() {
-    path_ = fs::temp_directory_path() /
-            ("pcl_movers_test_io_" + std::to_string(::getpid()) + "_" + std::to_string(counter_++));
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() { fs::remove_all(path_); }
-  std::string str() const { return path_.string(); }
-  fs::path path() const { return path_; }
-
- private:
-  fs::path path_;
-  static inline int counter_ = 0;
-};
-
-void writeText(const fs::path& p, const std::string& text) {
-  std::ofstream(p) << text;
-}
+using test_util::TempDir;
+using test_util::writeFile;
 
 pcl::PointCloud<pcl::PointXYZI> makeCloud(int n, float offset) {
   pcl::PointCloud<pcl::PointXYZI> cloud;
@@ -143,7 +127,7 @@ TEST(SequenceIO, GeoReferencedPosesKeepTheirMillimetres) {
   EXPECT_LT((back[0].linear() - pose.linear()).norm(), 1e-8);
 
   fs::create_directories(dir.path() / "seq" / "frames");
-  writeText(dir.path() / "seq" / "frames" / "000000.pcd",
+  writeFile(dir.path() / "seq" / "frames" / "000000.pcd",
             "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 1\n"
             "HEIGHT 1\nVIEWPOINT 456789.1234 5432101.5678 250.0012 1 0 0 0\nPOINTS 1\n"
             "DATA ascii\n5 0 -1\n");
@@ -194,10 +178,10 @@ TEST(SequenceIO, BadInputsNameTheFileAndReason) {
       expectInputError([&] { io::readScan((dir.path() / "cut.pcd").string(), cloud); });
   EXPECT_NE(cut_msg.find("cut.pcd"), std::string::npos);
   // Not a PCD at all.
-  writeText(dir.path() / "junk.pcd", "hello world\n");
+  writeFile(dir.path() / "junk.pcd", "hello world\n");
   expectInputError([&] { io::readScan((dir.path() / "junk.pcd").string(), cloud); });
   // PCD without x/y/z.
-  writeText(dir.path() / "noxyz.pcd",
+  writeFile(dir.path() / "noxyz.pcd",
             "VERSION .7\nFIELDS a b\nSIZE 4 4\nTYPE F F\nCOUNT 1 1\nWIDTH 1\nHEIGHT 1\n"
             "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 1\nDATA ascii\n1 2\n");
   EXPECT_NE(expectInputError([&] {
@@ -207,7 +191,7 @@ TEST(SequenceIO, BadInputsNameTheFileAndReason) {
   // A header line missing its value: PCL's parser throws std::out_of_range from vector::at(),
   // which must come out as an InputError naming the file (fuzz_pcd_pipeline finding,
   // test/fuzz/corpus_pcd/regression_pcd_header_out_of_range.pcd).
-  writeText(dir.path() / "nodata.pcd",
+  writeFile(dir.path() / "nodata.pcd",
             "VERSION .7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 1\nHEIGHT 1\n"
             "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 1\nDATA\nascii\n1 2 3\n");
   EXPECT_NE(expectInputError([&] {
@@ -215,18 +199,18 @@ TEST(SequenceIO, BadInputsNameTheFileAndReason) {
             }).find("nodata.pcd"),
             std::string::npos);
   // Truncated .bin.
-  writeText(dir.path() / "cut.bin", "0123456789");
+  writeFile(dir.path() / "cut.bin", "0123456789");
   EXPECT_NE(expectInputError([&] {
               io::readScan((dir.path() / "cut.bin").string(), cloud);
             }).find("truncated"),
             std::string::npos);
   // Missing file, malformed PLY, unknown extension.
   expectInputError([&] { io::readScan((dir.path() / "x.ply").string(), cloud); });
-  writeText(dir.path() / "x.ply", "ply");
+  writeFile(dir.path() / "x.ply", "ply");
   EXPECT_NE(
       expectInputError([&] { io::readScan((dir.path() / "x.ply").string(), cloud); }).find("x.ply"),
       std::string::npos);
-  writeText(dir.path() / "x.xyz", "1 2 3");
+  writeFile(dir.path() / "x.xyz", "1 2 3");
   EXPECT_NE(expectInputError([&] {
               io::readScan((dir.path() / "x.xyz").string(), cloud);
             }).find("unknown scan format"),
@@ -241,38 +225,38 @@ TEST(SequenceIO, PoseAndTimeFilesAreChecked) {
     for (int i = 0; i < 3; ++i) writer.writeFrame(i, makeCloud(3, 0));
   }
   const fs::path poses = fs::path(seq) / "poses.txt";
-  writeText(poses, "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1 0\n");
+  writeFile(poses, "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1 0\n");
   EXPECT_NE(expectInputError([&] { io::SequenceReader r(seq); }).find("has 2 poses"),
             std::string::npos);
-  writeText(poses, "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1\n1 0 0 0 0 1 0 0 0 0 1 0\n");
+  writeFile(poses, "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1\n1 0 0 0 0 1 0 0 0 0 1 0\n");
   EXPECT_NE(expectInputError([&] { io::SequenceReader r(seq); }).find("poses.txt:2"),
             std::string::npos);
-  writeText(poses, "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 x 0\n1 0 0 0 0 1 0 0 0 0 1 0\n");
+  writeFile(poses, "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 x 0\n1 0 0 0 0 1 0 0 0 0 1 0\n");
   EXPECT_NE(expectInputError([&] { io::SequenceReader r(seq); }).find("poses.txt:2"),
             std::string::npos);
-  writeText(poses, "2 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1 0\n");
+  writeFile(poses, "2 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1 0\n");
   EXPECT_NE(expectInputError([&] { io::SequenceReader r(seq); }).find("orthonormal"),
             std::string::npos);
   fs::remove(poses);
   const fs::path times = fs::path(seq) / "times.txt";
-  writeText(times, "0.0\n0.1\n");
+  writeFile(times, "0.0\n0.1\n");
   EXPECT_NE(expectInputError([&] { io::SequenceReader r(seq); }).find("2 timestamps"),
             std::string::npos);
-  writeText(times, "0.0\n0.2\n0.1\n");
+  writeFile(times, "0.0\n0.2\n0.1\n");
   EXPECT_NE(expectInputError([&] { io::SequenceReader r(seq); }).find("times.txt:3"),
             std::string::npos);
-  writeText(times, "0.0\n0.1\n0.2\n");
+  writeFile(times, "0.0\n0.1\n0.2\n");
   EXPECT_NO_THROW(io::SequenceReader r(seq));
 }
 
 TEST(SequenceIO, WriterRefusesNonEmptyFolderUnlessAsked) {
   TempDir dir;
-  writeText(dir.path() / "precious.txt", "keep me");
+  writeFile(dir.path() / "precious.txt", "keep me");
   EXPECT_NE(expectInputError([&] { io::SequenceWriter w(dir.str()); }).find("--overwrite"),
             std::string::npos);
   EXPECT_TRUE(fs::exists(dir.path() / "precious.txt"));
   EXPECT_NO_THROW(io::SequenceWriter w(dir.str(), true));
-  writeText(dir.path() / "file", "x");
+  writeFile(dir.path() / "file", "x");
   expectInputError([&] { io::prepareOutputDirectory((dir.path() / "file").string(), true); });
 }
 
@@ -301,7 +285,7 @@ TEST(GroundTruthIO, ObjectsRoundTripAndBoxTest) {
   EXPECT_TRUE(o.contains(Eigen::Vector3d(10, 3.9, -0.5)));
   EXPECT_FALSE(o.contains(Eigen::Vector3d(11.5, 2, -0.5)));
   EXPECT_TRUE(o.contains(Eigen::Vector3d(11.4, 2, -0.5), 1.0));  // grown by 1 m in width
-  writeText(dir.path() / "bad.txt", "# header\n0 1 Car 1 2 3 4 5 6 0.1 1 2.0 10\n0 1 Car 1 2 3\n");
+  writeFile(dir.path() / "bad.txt", "# header\n0 1 Car 1 2 3 4 5 6 0.1 1 2.0 10\n0 1 Car 1 2 3\n");
   EXPECT_NE(expectInputError([&] {
               io::readObjects((dir.path() / "bad.txt").string());
             }).find("bad.txt:3"),
@@ -317,7 +301,7 @@ TEST(GroundTruthIO, LabelsRoundTrip) {
   EXPECT_EQ(io::labelClass(back[0]), 10);
   EXPECT_EQ(io::labelInstance(back[0]), 5);
   EXPECT_TRUE(io::semantic::isGround(io::labelClass(back[1])));
-  writeText(dir.path() / "cut.label", "abcde");
+  writeFile(dir.path() / "cut.label", "abcde");
   expectInputError([&] { io::readLabels((dir.path() / "cut.label").string()); });
 }
 
@@ -339,12 +323,12 @@ TEST(TracksIO, RoundTripAndErrors) {
   const auto back = io::readTracks(path);
   ASSERT_EQ(back.size(), 1u);
   EXPECT_EQ(io::formatTrackRow(back[0]), io::formatTrackRow(r));
-  writeText(dir.path() / "bad.csv", std::string(io::tracksCsvHeader()) + "\n1,2,3\n");
+  writeFile(dir.path() / "bad.csv", std::string(io::tracksCsvHeader()) + "\n1,2,3\n");
   EXPECT_NE(expectInputError([&] {
               io::readTracks((dir.path() / "bad.csv").string());
             }).find("bad.csv:2"),
             std::string::npos);
-  writeText(dir.path() / "nohead.csv", "1,2,3\n");
+  writeFile(dir.path() / "nohead.csv", "1,2,3\n");
   expectInputError([&] { io::readTracks((dir.path() / "nohead.csv").string()); });
 }
 
@@ -360,7 +344,7 @@ TEST(TracksIO, FileColumnBesideTheFrameIndex) {
   io::writeTracks(path, {r});
   EXPECT_EQ(io::formatTrackRow(r).rfind("3,43,", 0), 0u) << io::formatTrackRow(r);
   EXPECT_EQ(io::readTracks(path).at(0).file, 43);
-  writeText(dir.path() / "old.csv",
+  writeFile(dir.path() / "old.csv",
             "frame,time,track_id,mover,x,y,z,wx,wy,wz,vx,vy,speed,length,width,height,yaw,"
             "similarity,points\n5,0.5,7,1,0,0,0,0,0,0,0,0,0,0,0,0,0,0,9\n");
   const auto old = io::readTracks((dir.path() / "old.csv").string());

@@ -19,31 +19,15 @@
 #include <fstream>
 #include <functional>
 
+#include "test_util.h"
+
 namespace fs = std::filesystem;
 using namespace pcl_movers;
 
 namespace {
 
-class TempDir {
- public:
-  TempDir() {
-    path_ = fs::temp_directory_path() / ("pcl_movers_test_inputs_" + std::to_string(::getpid()) +
-                                         "_" + std::to_string(counter_++));
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() { fs::remove_all(path_); }
-  std::string str() const { return path_.string(); }
-  fs::path path() const { return path_; }
-
- private:
-  fs::path path_;
-  static inline int counter_ = 0;
-};
-
-void writeText(const fs::path& p, const std::string& text) {
-  std::ofstream(p) << text;
-}
+using test_util::TempDir;
+using test_util::writeFile;
 
 /** A cloud whose first x is `offset`, so frames can be told apart. */
 pcl::PointCloud<pcl::PointXYZI> makeCloud(float offset) {
@@ -156,7 +140,7 @@ TEST(SequenceInputs, MixedFormatsAndScanFilesAreNamed) {
   EXPECT_NE(on_file.find("sequence folder is expected"), std::string::npos) << on_file;
 
   TempDir empty;
-  writeText(empty.path() / "notes.txt", "no scans\n");
+  writeFile(empty.path() / "notes.txt", "no scans\n");
   const std::string none = expectInputError([&] { io::SequenceReader reader(empty.str()); });
   EXPECT_NE(none.find("no frames"), std::string::npos) << none;
 }
@@ -164,9 +148,9 @@ TEST(SequenceInputs, MixedFormatsAndScanFilesAreNamed) {
 TEST(SequenceInputs, KittiPoseFileGivenByPath) {
   TempDir dir;
   for (int n = 0; n < 3; ++n) writeFrame(dir.path() / "velodyne", n, ".bin");
-  writeText(dir.path() / "poses.txt", "not a pose\n");  // ignored: --poses wins
+  writeFile(dir.path() / "poses.txt", "not a pose\n");  // ignored: --poses wins
   const fs::path poses = dir.path() / "elsewhere.txt";
-  writeText(poses, kittiLine(0, 0, 0, 0) + kittiLine(0.1, 1, 0, 0) + kittiLine(0.2, 2, 0.5, 0));
+  writeFile(poses, kittiLine(0, 0, 0, 0) + kittiLine(0.1, 1, 0, 0) + kittiLine(0.2, 2, 0.5, 0));
   io::SequenceOptions options;
   options.poses_path = poses.string();
   io::SequenceReader reader(dir.str(), options);
@@ -183,7 +167,7 @@ TEST(SequenceInputs, KittiPoseFileGivenByPath) {
 TEST(SequenceInputs, BadPosesTxtIsNotReadWithoutPoses) {
   TempDir dir;
   for (int n = 0; n < 2; ++n) writeFrame(dir.path(), n, ".pcd");
-  writeText(dir.path() / "poses.txt", "1 2 3\n");
+  writeFile(dir.path() / "poses.txt", "1 2 3\n");
   const std::string what = expectInputError([&] { io::SequenceReader reader(dir.str()); });
   EXPECT_NE(what.find("poses.txt"), std::string::npos) << what;
   io::SequenceOptions options;
@@ -196,7 +180,7 @@ TEST(SequenceInputs, BadPosesTxtIsNotReadWithoutPoses) {
 TEST(SequenceInputs, TumPosesInOrderAndMatchedByTime) {
   TempDir dir;
   for (int n = 0; n < 4; ++n) writeFrame(dir.path(), n, ".bin");
-  writeText(dir.path() / "times.txt", "0.0\n0.1\n0.2\n0.3\n");
+  writeFile(dir.path() / "times.txt", "0.0\n0.1\n0.2\n0.3\n");
   // Twice the frame rate, starting a little before the first frame: interpolated at 0.1 s.
   std::string tum = "# timestamp x y z qx qy qz qw\n";
   for (int k = 0; k < 8; ++k) {
@@ -206,7 +190,7 @@ TEST(SequenceInputs, TumPosesInOrderAndMatchedByTime) {
                   std::sin(0.5 * yaw), std::cos(0.5 * yaw));
     tum += line;
   }
-  writeText(dir.path() / "traj.tum", tum);
+  writeFile(dir.path() / "traj.tum", tum);
   io::SequenceOptions options;
   options.poses_path = (dir.path() / "traj.tum").string();
   options.poses_format = io::parsePoseFormat("tum");
@@ -220,21 +204,21 @@ TEST(SequenceInputs, TumPosesInOrderAndMatchedByTime) {
   }
 
   // Same count as frames: taken in order, whatever the stamps.
-  writeText(dir.path() / "four.tum",
+  writeFile(dir.path() / "four.tum",
             "100 1 0 0 0 0 0 1\n200 2 0 0 0 0 0 1\n300 3 0 0 0 0 0 1\n400 4 0 0 0 0 0 1\n");
   options.poses_path = (dir.path() / "four.tum").string();
   io::SequenceReader in_order(dir.str(), options);
   EXPECT_DOUBLE_EQ(in_order.pose(3).translation().x(), 4.0);
 
   // Too far from every pose: the frame and the nearest pose time are named.
-  writeText(dir.path() / "short.tum", "0.0 0 0 0 0 0 0 1\n0.05 1 0 0 0 0 0 1\n0.1 2 0 0 0 0 0 1\n");
+  writeFile(dir.path() / "short.tum", "0.0 0 0 0 0 0 0 1\n0.05 1 0 0 0 0 0 1\n0.1 2 0 0 0 0 0 1\n");
   options.poses_path = (dir.path() / "short.tum").string();
   const std::string what = expectInputError([&] { io::SequenceReader r(dir.str(), options); });
   EXPECT_NE(what.find("short.tum"), std::string::npos) << what;
   EXPECT_NE(what.find("frame 2"), std::string::npos) << what;
   EXPECT_NE(what.find("nearest pose is at 0.1"), std::string::npos) << what;
 
-  writeText(dir.path() / "bad.tum", "0.0 0 0 0 0 0 0\n");
+  writeFile(dir.path() / "bad.tum", "0.0 0 0 0 0 0 0\n");
   options.poses_path = (dir.path() / "bad.tum").string();
   const std::string bad = expectInputError([&] { io::SequenceReader r(dir.str(), options); });
   EXPECT_NE(bad.find("bad.tum:1"), std::string::npos) << bad;
@@ -248,10 +232,10 @@ TEST(SequenceInputs, KittiCameraPosesWithCalib) {
   TempDir dir;
   for (int n = 0; n < 2; ++n) writeFrame(dir.path() / "velodyne", n, ".bin");
   // Tr: velodyne x forward -> camera z forward (x right = -y_velo, y down = -z_velo).
-  writeText(dir.path() / "calib.txt",
+  writeFile(dir.path() / "calib.txt",
             "P0: 1 0 0 0 0 1 0 0 0 0 1 0\nTr: 0 -1 0 0 0 0 -1 -0.08 1 0 0 -0.27\n");
   // The camera moves 2 m along its z (forward) axis.
-  writeText(dir.path() / "cam.txt", kittiLine(0, 0, 0, 0) + "1 0 0 0 0 1 0 0 0 0 1 2\n");
+  writeFile(dir.path() / "cam.txt", kittiLine(0, 0, 0, 0) + "1 0 0 0 0 1 0 0 0 0 1 2\n");
   io::SequenceOptions options;
   options.poses_path = (dir.path() / "cam.txt").string();
   options.poses_format = io::PoseFormat::kitti_camera;

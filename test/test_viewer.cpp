@@ -478,6 +478,9 @@ TEST(SceneStyle, SelectionCyclesMoversFirst) {
   EXPECT_NE(text.find("frame 12/76"), std::string::npos) << text;
   EXPECT_NE(text.find("movers: 2"), std::string::npos) << text;
   EXPECT_NE(text.find("track 5 (mover): 5.0 m/s"), std::string::npos) << text;
+  // The overlay names the frame as tracks.csv does: index and file number.
+  const std::string with_file = viz::overlayText(3, 77, 0.3, 0, nullptr, "", 43);
+  EXPECT_NE(with_file.find("frame 3/76 (file 000043)"), std::string::npos) << with_file;
 }
 
 // ------------------------------------------------------------------ the tool
@@ -494,8 +497,8 @@ TEST_F(ViewerTool, HelpListsKeysAndDefaults) {
   TempDir tmp("help");
   const auto r = runTool("-h", tmp.path / "log");
   EXPECT_EQ(r.code, 0);
-  for (const char* s : {"--screenshot-dir", "--detections", "space", "tab", "1 / 2 / 3",
-                        "(default: chase)", "(default: 1280x720)"})
+  for (const char* s : {"--screenshot-dir", "--detections", "--movers-only", "--point-labels",
+                        "space", "tab", "1 / 2 / 3", "(default: chase)", "(default: 1280x720)"})
     EXPECT_NE(r.output.find(s), std::string::npos) << s << "\n" << r.output;
 }
 
@@ -598,6 +601,70 @@ TEST_F(ViewerTool, RendersTheMoverInRedWhereItProjects) {
   Image im;
   ASSERT_TRUE(readPpm(plain / "000001.ppm", im));
   EXPECT_EQ(countRed(im), 0);
+}
+
+// --movers-only draws the mover (its points, box, arrow, trail) and nothing else: the ground and
+// the pole vanish, the mover stays where it was.
+TEST_F(ViewerTool, MoversOnlyDrawsOnlyTheMovers) {
+  if (!hasDisplay()) GTEST_SKIP() << "no X display (DISPLAY unset): run the tests under xvfb-run";
+  TempDir tmp("movers_only");
+  SyntheticScene scene(tmp.path);
+  const int w = 640, h = 480;
+  auto render = [&](const std::string& name, const std::string& extra, Image& im) {
+    const fs::path shots = tmp.path / name;
+    const auto r = runTool("\"" + scene.seq.string() + "\" --detections \"" + scene.det.string() +
+                               "\" --frames 1 --size 640x480 --format ppm --camera bird" + extra +
+                               " --screenshot-dir \"" + shots.string() + "\"",
+                           tmp.path / "log");
+    ASSERT_EQ(r.code, 0) << r.output;
+    ASSERT_TRUE(readPpm(shots / "000001.ppm", im));
+  };
+  const viz::SceneStyle style;
+  auto drawn = [&](const Image& im) {
+    std::size_t n = 0;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const auto* p = im.at(x, y);
+        n += (p[0] != style.background.r || p[1] != style.background.g ||
+              p[2] != style.background.b);
+      }
+    return n;
+  };
+  Image all, movers;
+  render("all", "", all);
+  render("movers", " --movers-only", movers);
+  const auto cam = viz::cameraView(viz::CameraPreset::Bird);
+  viz::OrientedBox box;
+  box.center = scene.mover_center;
+  box.length = 4, box.width = 2, box.height = 1.5;
+  EXPECT_GT(countRedInBox(movers, cam, box), 30) << "the mover must still be drawn";
+  EXPECT_LT(drawn(movers) * 4, drawn(all)) << "ground and pole must be left out";
+}
+
+// A labelled/ folder copied from another run is refused, naming it: its run_key.txt differs
+// from summary.json's run_key, or its clouds are named after frames the sequence lacks.
+TEST_F(ViewerTool, RefusesALabelledFolderOfAnotherRun) {
+  TempDir tmp("foreign_labelled");
+  SyntheticScene scene(tmp.path);
+  const fs::path labelled = scene.det / "labelled";
+  fs::create_directories(labelled);
+  std::ofstream(scene.det / "summary.json") << "{\n  \"run_key\": \"1111222233334444\"\n}\n";
+  std::ofstream(labelled / "run_key.txt") << "9999888877776666\n";
+  const std::string args = "\"" + scene.seq.string() + "\" --detections \"" + scene.det.string() +
+                           "\" --screenshot-dir \"" + (tmp.path / "shots").string() + "\"";
+  auto r = runTool(args, tmp.path / "log");
+  EXPECT_NE(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find(labelled.string()), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("another run"), std::string::npos) << r.output;
+  // The matching stamp is accepted as far as the labelled clouds go; a cloud of a frame the
+  // sequence does not have is not.
+  std::ofstream(labelled / "run_key.txt") << "1111222233334444\n";
+  std::ofstream(labelled / "000042.pcd") << "not read: refused before";
+  r = runTool(args, tmp.path / "log");
+  EXPECT_NE(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("000042.pcd"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("another sequence"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(tmp.path / "shots"));
 }
 
 TEST_F(ViewerTool, WritesPngScreenshotsOfAFrameRange) {

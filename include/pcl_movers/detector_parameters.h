@@ -314,8 +314,8 @@ struct DetectorParameters {
     const_cast<DetectorParameters*>(this)->forEachParameter(f);
   }
 
-  /** \brief Sets `key` from text; throws InputError("where: ...") for an unknown key or a value
-   * that is not a valid number. */
+  /** \brief Sets `key` (snake_case, or kebab-case: sensor-height) from text; throws
+   * InputError("where: ...") for an unknown key or a value that is not a valid number. */
   void set(const std::string& key, const std::string& value, const std::string& where);
   /** \brief Reads `key = value` lines ('#' comments and blank lines allowed); unknown keys and
    * malformed lines throw InputError with file:line. */
@@ -492,9 +492,12 @@ inline std::string jsonValue(const std::string& v) {
 
 inline void DetectorParameters::set(const std::string& key, const std::string& value,
                                     const std::string& where) {
+  std::string snake = key;  // the command line's spelling, sensor-height, is accepted too
+  for (char& c : snake)
+    if (c == '-') c = '_';
   bool found = false;
   forEachParameter([&](const char* k, auto& member, const char*) {
-    if (key == k) {
+    if (snake == k) {
       detail::parseValue(detail::trim(value), member, key, where);
       found = true;
     }

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdint>
 #include <deque>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -53,14 +54,15 @@ class FreeSpaceMap {
   double getMargin() const { return margin_; }
   double getMarginPerMetre() const { return margin_per_metre_; }
   /** \brief A direction below the stored scan's sensor (z < 0 in its frame) whose whole window
-   * returned nothing, although a beam passed through the window's elevations (some return in
-   * one of its rows at another azimuth), counts as seen empty up to this range [m]; 0, the default:
+   * returned nothing, although one of the window's rows is a beam (some stored scan has a return
+   * in it), counts as seen empty up to this range [m]; 0, the default:
    * such a direction is unknown and not tested. See DetectorParameters::free_space_no_return for
    * why only downward directions. */
   void setNoReturnRange(double range) { no_return_range_ = range > 0 ? range : 0; }
   double getNoReturnRange() const { return no_return_range_; }
   /** \brief Height of the sensor above the ground [m] for the no-return rule: only a ray that
-   * would meet the ground beyond the no-return range counts. A steeper ray should have returned
+   * would meet the ground beyond the no-return range counts, and a point whose window holds a
+   * steeper ray that returned nothing is not tested at all. A steeper ray should have returned
    * from the ground, so its silence means a return dropped, absorbed or closer than the sensor's
    * minimum range (a parked van passed at 2 m: its side was inside a VLP-16's 2 m minimum range
    * and the silent rays made it "seen through"). 0, the default: every downward ray counts. */
@@ -96,18 +98,20 @@ class FreeSpaceMap {
   Evidence test(const std::vector<Eigen::Vector3f>& world_points, int frames_ago) const;
 
   /** \brief Forgets all scans. */
-  void clear() { scans_.clear(); }
+  void clear() {
+    scans_.clear();
+    indexBeamRows();
+  }
 
  protected:
   struct Scan {
     Eigen::Isometry3f world_to_sensor = Eigen::Isometry3f::Identity();
     std::vector<float> range;  ///< 0 = no return; empty for a blind frame (addBlindScan())
-    /// 1 for the rows (elevations) in which some return was stored: a beam passed there. Between
-    /// the beams of a sparse sensor (VLP-16: 2°, 10 rows of 0.2°) a cell is empty because no ray
-    /// was cast, which says nothing about the space there.
+    /// 1 for the rows (elevations) in which some return was stored.
     std::vector<std::uint8_t> sampled_rows;
-    /// For each row, the nearest sampled row below and above it (-1 / rows when none).
-    std::vector<int> sampled_below, sampled_above;
+    /// Shortest range returned [m]: nothing closer is reported by the sensor (its minimum range),
+    /// so a silent ray says nothing about the space up to there.
+    float min_range = 0.0f;
   };
   /** \brief cells[i] = row · cols + column of the direction of point i (sensor frame), or -1
    * (not finite, under 0.5 m, outside the rows); ranges[i] = its range. */
@@ -116,14 +120,17 @@ class FreeSpaceMap {
   /** \brief A ray at this elevation (its sine) stays above the ground up to the no-return range
    * (see setSensorHeight()). */
   bool passesOverGround(float sin_elevation) const;
-  /** \brief Fills scan.sampled_below / sampled_above from scan.sampled_rows. */
-  void indexSampledRows(Scan& scan) const;
+  /** \brief passesOverGround() for the rays of a row (true without a sensor height). */
+  bool rowPassesOverGround(int row) const;
+  /** \brief Recomputes beam_rows_ (rows with a return in any stored scan: the sensor's beams)
+   * and, per row, the nearest beam row below and above it. */
+  void indexBeamRows();
   /** \brief Rows compared around `row`: ±win_rows and at least the nearest beam below and above
    * (within kMaxBeamGapRows), so that a sparse sensor's direction between two beams is judged by
    * both. Otherwise a point at an object's top edge, tested against an earlier scan whose
    * beam just above passed over the object and whose beam below hit it outside the window, was
    * "seen through" (VLP-16, 2° between beams: a parked van passed at 2 m was a mover). */
-  void windowRows(const Scan& scan, int row, int& lo, int& hi) const;
+  void windowRows(int row, int& lo, int& hi) const;
   static constexpr int kMaxBeamGapRows = 25;
   int cellRow(float elevation_deg) const {
     return static_cast<int>(std::floor((elevation_deg - min_el_deg_) / el_res_deg_));
@@ -143,6 +150,11 @@ class FreeSpaceMap {
   double sensor_height_ = 0;
   int win_rows_ = 2, win_cols_ = 1;
   std::deque<Scan> scans_;
+  /// Rows with a return in some stored scan (the sensor's beams: between the beams of a sparse
+  /// sensor, VLP-16 2° = 10 rows apart, a cell is empty because no ray was cast there), and per
+  /// row the nearest such row below / above it (-1 / rows_ when none).
+  std::vector<std::uint8_t> beam_rows_;
+  std::vector<int> beam_below_, beam_above_;
 };
 
 // ----------------------------------------------------------------------------- implementation
@@ -176,6 +188,7 @@ void FreeSpaceMap::addScan(const pcl::PointCloud<PointT>& scan, const Eigen::Iso
   s.world_to_sensor = pose.inverse().cast<float>();
   s.range.assign(static_cast<std::size_t>(rows_) * cols_, 0.0f);
   s.sampled_rows.assign(static_cast<std::size_t>(rows_), 0);
+  s.min_range = std::numeric_limits<float>::max();
   // In blocks: the coordinates copied out of the point structs, the cells computed by a loop
   // that vectorizes (computeCells()), then the nearest range kept per cell.
   constexpr std::size_t kBlock = 512;
@@ -196,10 +209,11 @@ void FreeSpaceMap::addScan(const pcl::PointCloud<PointT>& scan, const Eigen::Iso
       float& cell = s.range[static_cast<std::size_t>(cells[i])];
       if (cell == 0.0f || ranges[i] < cell) cell = ranges[i];
       s.sampled_rows[static_cast<std::size_t>(cells[i] / cols_)] = 1;
+      s.min_range = std::min(s.min_range, ranges[i]);
     }
   }
-  indexSampledRows(s);
   scans_.push_front(std::move(s));
+  indexBeamRows();
 }
 
 }  // namespace pcl_movers

@@ -280,7 +280,7 @@ void VelodyneCapture::Impl::checkModel(const std::uint8_t* data) const {
       if (little16(data + 100 * b) == kLowerBlock)
         throw InputError(path_, 0,
                          "has lower-block (0xDDFF) packets: an HDL-64E capture, not " +
-                             velodyneModelName(model_) + ": use hdl64 with --calibration");
+                             velodyneModelName(model_) + ": use hdl64 with --calib");
 }
 
 void VelodyneCapture::Impl::addPacket(const std::uint8_t* data, double capture_time) {

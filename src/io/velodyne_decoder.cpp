@@ -135,12 +135,12 @@ VelodyneDecoder::VelodyneDecoder(VelodyneModel model, const std::string& calibra
   if (!calibration.empty()) {
     if (model == VelodyneModel::kVlp16)
       throw InputError(calibration, 0,
-                       "--calibration is for the HDL-32E/HDL-64E: PCL's VLPGrabber decodes the "
+                       "--calib is for the HDL-32E/HDL-64E: PCL's VLPGrabber decodes the "
                        "VLP-16 with its fixed table");
     checkCalibrationFile(calibration, laserCount(model));
   } else if (model == VelodyneModel::kHdl64) {
     throw InputError(
-        "hdl64: a calibration XML is required (--calibration; VeloView/PCL db.xml format): PCL "
+        "hdl64: a calibration XML is required (--calib; VeloView/PCL db.xml format): PCL "
         "has no default HDL-64E table and decodes lasers 32-63 at elevation 0 without one");
   }
   if (model == VelodyneModel::kVlp16)

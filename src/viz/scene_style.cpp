@@ -321,10 +321,11 @@ int nextSelectedTrack(const std::vector<io::TrackRow>& frame_rows, int current) 
 }
 
 std::string overlayText(std::size_t frame, std::size_t frames, double time, int movers,
-                        const io::TrackRow* selected, const std::string& extra) {
-  char line[256];
-  std::snprintf(line, sizeof(line), "frame %zu/%zu   t = %.2f s   movers: %d", frame,
-                frames > 0 ? frames - 1 : 0, time, movers);
+                        const io::TrackRow* selected, const std::string& extra, long long file) {
+  char line[256], file_text[40] = "";
+  if (file >= 0) std::snprintf(file_text, sizeof(file_text), " (file %06lld)", file);
+  std::snprintf(line, sizeof(line), "frame %zu/%zu%s   t = %.2f s   movers: %d", frame,
+                frames > 0 ? frames - 1 : 0, file_text, time, movers);
   std::string text = line;
   if (selected) {
     std::snprintf(line, sizeof(line), "\ntrack %d%s: %.1f m/s (%.0f km/h), B = %.2f, %d points",

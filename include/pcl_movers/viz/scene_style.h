@@ -207,9 +207,11 @@ std::pair<Eigen::Vector3d, Eigen::Vector3d> velocityArrow(const io::TrackRow& ro
  * first), or -1 when there are no rows. Used by the Tab key. */
 int nextSelectedTrack(const std::vector<io::TrackRow>& frame_rows, int current);
 
-/** \brief The overlay text: frame, time, number of movers, selected track and its speed. */
+/** \brief The overlay text: frame (with `file`, the number in its file's name, when >= 0: as
+ * tracks.csv's `frame` and `file`), time, number of movers, selected track and its speed. */
 std::string overlayText(std::size_t frame, std::size_t frames, double time, int movers,
-                        const io::TrackRow* selected, const std::string& extra = "");
+                        const io::TrackRow* selected, const std::string& extra = "",
+                        long long file = -1);
 
 }  // namespace viz
 }  // namespace pcl_movers
