@@ -119,7 +119,8 @@ void printHelp(const char* argv0) {
       "  of 0 on a scored point is an FN), static IoU likewise; then per-frame counts. A\n"
       "  prediction missing for a ground-truth frame, or with another point count, is an error.\n\n"
       "Options (-h, --help: this help):\n%s",
-      argv0, d.metrics.velocity_half_window, d.metrics.moving_speed, optionTable().help().c_str());
+      argv0, argv0, d.metrics.velocity_half_window, d.metrics.moving_speed,
+      optionTable().help().c_str());
 }
 
 using pcl_movers::tools::parseNumber;

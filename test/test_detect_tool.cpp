@@ -227,7 +227,8 @@ TEST_F(DetectTool, SigintAndSigtermLeaveCompleteFramesAndResume) {
     SCOPED_TRACE(sig == SIGINT ? "SIGINT" : "SIGTERM");
     const std::string out = dir_ + (sig == SIGINT ? "/sigint" : "/sigterm");
     const std::string err = dir_ + "/signal_stderr.txt";
-    const pid_t pid = start({dir_ + "/seq", out, "--labelled-clouds"}, err);
+    // The reference's options: its labelled/run_key.txt is compared too.
+    const pid_t pid = start({dir_ + "/seq", out, "--labelled-clouds", "--point-labels"}, err);
     // As soon as the first frame is written (30 frames to go: the run cannot be over yet).
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
     while (std::chrono::steady_clock::now() < deadline && !fs::exists(out + "/labelled/000000.pcd"))
@@ -242,7 +243,8 @@ TEST_F(DetectTool, SigintAndSigtermLeaveCompleteFramesAndResume) {
     EXPECT_LT(done, 30);
     EXPECT_EQ(rowsBefore(readFile(out + "/tracks.csv"), 1000), rowsBefore(reference_, done));
     if (sig != SIGINT) continue;
-    const ToolRun resumed = detect({dir_ + "/seq", out, "--labelled-clouds", "--resume"}, dir_);
+    const ToolRun resumed =
+        detect({dir_ + "/seq", out, "--labelled-clouds", "--point-labels", "--resume"}, dir_);
     ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
     EXPECT_EQ(readFile(out + "/tracks.csv"), reference_);
     expectSameLabelled(out);
