@@ -68,7 +68,7 @@ XVFB=()
 if [ -z "${DISPLAY:-}" ] && command -v xvfb-run >/dev/null; then
   XVFB=(xvfb-run -a -s "-screen 0 1280x1024x24")
 fi
-"${XVFB[@]}" "${CTEST[@]}" -E '^(ViewerTool|BadInputs|VelodyneCapture)\.'
+"${XVFB[@]}" "${CTEST[@]}" -E '^(ViewerTool|BadInputs|VelodyneCapture|LiveInput|FrameStream)\.'
 # The viewer tests run pcl_movers_viewer, which loads the Mesa GL driver under Xvfb. That driver
 # leaves ~112 bytes allocated at exit from a module it has already unloaded (LSan reports
 # "<unknown module>", so no suppression file can name it). Leak detection is therefore off for
@@ -79,10 +79,11 @@ ASAN_OPTIONS="${ASAN_OPTIONS/detect_leaks=1/detect_leaks=0}" "${XVFB[@]}" "${CTE
 # has Eigen's aligned operator new; our C++17 code releases them through shared_ptr with the
 # global operator delete. ASan reports alloc-dealloc-mismatch; on x86-64 glibc both sides are
 # malloc/free (Eigen's aligned malloc is plain malloc there), and nothing on our side can pair
-# them. The tests that construct a grabber (the capture tests, and the bad-input matrix, whose
-# fixture writes a capture) run with that one check off; every other check stays on.
+# them. The tests that construct a grabber (the capture tests, the live-input and frame-source
+# tests, and the bad-input matrix, whose fixture writes a capture) run with that one check off;
+# every other check stays on.
 ASAN_OPTIONS="$ASAN_OPTIONS:alloc_dealloc_mismatch=0" "${XVFB[@]}" "${CTEST[@]}" \
-  -R '^(BadInputs|VelodyneCapture)\.'
+  -R '^(BadInputs|VelodyneCapture|LiveInput|FrameStream)\.'
 stamp "ctest"
 
 echo "== simulate + detect on data/scenarios/sample.yaml under ASan+UBSan"
