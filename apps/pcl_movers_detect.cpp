@@ -1,17 +1,22 @@
 /*
- * pcl_movers_detect SEQ OUT — the mover-detection pipeline on a sequence folder.
+ * pcl_movers_detect SEQ OUT — the mover-detection pipeline on a sequence folder, a Velodyne
+ * packet capture (--pcap) or a live sensor (--live). Reading runs on a thread of its own
+ * (io::FrameStream), detection and writing on the main thread.
  * SPDX-License-Identifier: BSD-3-Clause
  */
 #include <pcl_movers/deskew.h>
 #include <pcl_movers/detector_parameters.h>
 #include <pcl_movers/ego_motion_estimator.h>
+#include <pcl_movers/io/frame_stream.h>
 #include <pcl_movers/io/ground_truth.h>
 #include <pcl_movers/io/point_labels.h>
 #include <pcl_movers/io/sequence.h>
 #include <pcl_movers/io/tracks.h>
+#include <pcl_movers/io/velodyne_capture.h>
 #include <pcl_movers/mover_detector.h>
 
 #include <pcl/PCLPointCloud2.h>
+#include <pcl/common/io.h>
 #include <pcl/io/pcd_io.h>
 
 #include <signal.h>
@@ -23,8 +28,10 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <iterator>
 #include <map>
+#include <memory>
 #include <set>
 #include <sstream>
 #include <type_traits>
@@ -58,6 +65,21 @@ pcl_movers::tools::OptionTable optionTable() {
   const std::string rate = pcl_movers::tools::str(pcl_movers::io::SequenceOptions().rate_hz);
   pcl_movers::tools::OptionTable table(
       {{"--config", "FILE", "'key = value' lines with any of the parameters below"},
+       {"--pcap", "FILE",
+        "read a Velodyne packet capture (libpcap) instead of SEQ; --sensor\nhdl32, hdl64 (with "
+        "--calibration) or vlp16 (auto: from the packets)"},
+       {"--live", "",
+        "receive a live Velodyne sensor's UDP packets instead of SEQ\n(--sensor "
+        "required; ends on --frames, --duration, SIGINT)"},
+       {"--port", "N", "--live: UDP port of the sensor's data packets", "2368"},
+       {"--calibration", "XML", "--pcap/--live: VeloView/PCL calibration (db.xml) of the sensor"},
+       {"--timeout", "S", "--live: error when no data packet comes for S seconds", "5"},
+       {"--frames", "N", "read at most N frames (sweeps), then finish normally"},
+       {"--duration", "S", "read for at most S seconds of wall time, then finish normally"},
+       {"--queue-capacity", "N",
+        "frames read ahead of detection (reading runs on its own thread);\nfull: a folder or "
+        "--pcap waits, --live drops the oldest sweep\n(counted in summary.json)",
+        "4"},
        {"--rate", "HZ", "frame rate when SEQ has no times.txt", rate},
        {"--poses", "FILE", "sensor poses from FILE instead of SEQ/poses.txt"},
        {"--poses-format", "F",
@@ -97,7 +119,9 @@ pcl_movers::tools::OptionTable optionTable() {
 
 void printHelp(const char* name) {
   std::ostringstream os;
-  os << "Usage: " << name << " SEQ OUT [options]\n\n"
+  os << "Usage: " << name << " SEQ OUT [options]\n"
+     << "       " << name << " --pcap FILE OUT [--sensor hdl32|hdl64|vlp16] [options]\n"
+     << "       " << name << " --live --sensor hdl32|hdl64|vlp16 [--port 2368] OUT [options]\n\n"
      << "Detects movers (moving vehicles and people) in the LiDAR sequence folder SEQ (scans\n"
      << ".pcd, .bin (KITTI) or .ply, one format, in SEQ itself, SEQ/frames/ or SEQ/velodyne/;\n"
      << "poses.txt, --poses or PCD VIEWPOINTs; times.txt) and writes to OUT:\n"
@@ -130,7 +154,14 @@ void printHelp(const char* name) {
         "run\n"
      << "after the current frame: tracks.csv keeps every complete frame, summary.json says\n"
      << "\"interrupted\": true, exit code 130/143. Geo-referenced (UTM) poses are fine.\n"
-     << "Older spellings with '_' (--sensor_height) still work, with a warning.\n";
+     << "Older spellings with '_' (--sensor_height) still work, with a warning.\n"
+     << "--pcap/--live: frame i is the i-th full sweep (tracks.csv frame and file, outputs\n"
+     << "NNNNNN.pcd/.label), its time the sweep's first firing [s past the hour, the sensor's\n"
+     << "clock]; organized by laser and azimuth (PCL's grabber decodes the packets); --poses\n"
+     << "gives one pose per sweep (kitti) or by time (tum), else they are estimated; --deskew\n"
+     << "uses the packets' firing times. --live drops the oldest waiting sweep when detection\n"
+     << "falls behind (counted: summary.json dropped_frames, progress lines); its tracks.csv\n"
+     << "`file` is the sweep number, `frame` the index among the detected ones.\n";
   print_info("%s", os.str().c_str());
 }
 
@@ -199,10 +230,9 @@ void toInputOrder(const Detector::FrameResult& result, std::size_t n,
 
 /** Labelled cloud: every point of the input file `input`, in its order and with its fields, plus
  * its class and track id (class 0, track -1 for the points the range image did not keep). */
-void writeLabelledCloud(const std::string& path, const std::string& input,
+void writeLabelledCloud(const std::string& path, const pcl::PCLPointCloud2& in,
                         const Detector::FrameResult& result) {
-  pcl::PCLPointCloud2 in, out;
-  pcl_movers::io::readScanBlob(input, in);
+  pcl::PCLPointCloud2 out;
   const std::size_t n = static_cast<std::size_t>(in.width) * in.height;
   std::vector<std::uint32_t> labels;
   std::vector<std::int32_t> tracks;
@@ -216,6 +246,14 @@ void writeLabelledCloud(const std::string& path, const std::string& input,
     std::memcpy(d + in.point_step + 4, &tracks[j], 4);
   }
   writeLabelledBlob(path, out);
+}
+
+/** The same, for the input file `input` (read again: every field of the file). */
+void writeLabelledCloud(const std::string& path, const std::string& input,
+                        const Detector::FrameResult& result) {
+  pcl::PCLPointCloud2 in;
+  pcl_movers::io::readScanBlob(input, in);
+  writeLabelledCloud(path, in, result);
 }
 
 /** Labelled cloud of a frame whose file could not be read (--skip-bad-frames): no point. */
@@ -313,8 +351,67 @@ struct Options {
   bool overwrite = false, labelled = false, force_estimate = false, skip_bad = false;
   bool point_labels = false;
   bool resume = false;
-  long stop_after = -1;  ///< hidden --stop-after-frames N (tests): stop as on SIGINT after N
+  long stop_after = -1;     ///< hidden --stop-after-frames N (tests): stop as on SIGINT after N
+  std::string pcap;         ///< --pcap FILE
+  bool live = false;        ///< --live
+  int port = 2368;          ///< --port
+  std::string calibration;  ///< --calibration XML
+  double timeout = 5.0;     ///< --timeout S (live)
+  double duration = 0.0;    ///< --duration S (0: none)
+  long frames = -1;         ///< --frames N (-1: all)
+  std::size_t queue = 4;    ///< --queue-capacity N
+  bool packets() const { return live || !pcap.empty(); }
+  /** What the frames come from, for messages and summary.json. */
+  std::string inputName() const {
+    return live ? "udp:" + std::to_string(port) : pcap.empty() ? seq : pcap;
+  }
 };
+
+/** A positive whole number given to `flag`. */
+long parseCount(const std::string& flag, const std::string& v) {
+  const double n = pcl_movers::tools::parseNumber(flag, v);
+  if (!(n >= 1) || n != std::floor(n) || n > 1e12)
+    throw InputError(flag + ": '" + v + "' is not a positive whole number");
+  return static_cast<long>(n);
+}
+
+/** A positive number of seconds given to `flag`. */
+double parseSeconds(const std::string& flag, const std::string& v) {
+  const double s = pcl_movers::tools::parseNumber(flag, v);
+  if (!(s > 0)) throw InputError(flag + ": '" + v + "' is not a positive number of seconds");
+  return s;
+}
+
+/** --pcap, --live and their options, checked together. */
+void parseInputOptions(const pcl_movers::tools::Arguments& args, Options& o) {
+  std::string v;
+  args.get("--pcap", o.pcap);
+  o.live = args.has("--live");
+  if (o.live && !o.pcap.empty()) throw InputError("--pcap and --live exclude each other: give one");
+  if (args.get("--port", v)) {
+    const double port = pcl_movers::tools::parseNumber("--port", v);
+    if (!(port >= 1 && port <= 65535) || port != std::floor(port))
+      throw InputError("--port: '" + v + "' is not a UDP port (1-65535)");
+    o.port = static_cast<int>(port);
+  }
+  args.get("--calibration", o.calibration);
+  if (args.get("--timeout", v)) o.timeout = parseSeconds("--timeout", v);
+  if (args.get("--duration", v)) o.duration = parseSeconds("--duration", v);
+  if (args.get("--frames", v)) o.frames = parseCount("--frames", v);
+  if (args.get("--queue-capacity", v))
+    o.queue = static_cast<std::size_t>(parseCount("--queue-capacity", v));
+  for (const char* live_only : {"--port", "--timeout"})
+    if (args.has(live_only) && !o.live) throw InputError(std::string(live_only) + " is for --live");
+  if (args.has("--calibration") && !o.packets())
+    throw InputError("--calibration is for --pcap or --live (a sequence folder is decoded)");
+  if (!o.packets()) return;
+  if (o.live && o.resume) throw InputError("--resume cannot continue a --live run");
+  const std::string& sensor = o.params.sensor;
+  if (sensor != "hdl32" && sensor != "hdl64" && sensor != "vlp16" && !(sensor == "auto" && !o.live))
+    throw InputError("--sensor '" + sensor + "': " + (o.live ? "--live" : "--pcap") +
+                     " needs a Velodyne sensor: hdl32, hdl64 or vlp16" +
+                     (o.live ? "" : " (or auto: from the packets)"));
+}
 
 double parseRate(const std::string& r) {
   char* end = nullptr;
@@ -362,18 +459,31 @@ bool parseOptions(int argc, char** argv, Options& o) {
       throw InputError("--stop-after-frames: '" + v + "' is not a positive whole number");
     o.stop_after = static_cast<long>(n);
   }
-  if (args.positional.size() != 2) {
-    printHelp(argv[0]);
-    throw InputError("expected 2 arguments SEQ OUT, got " + std::to_string(args.positional.size()));
+  o.resume = args.has("--resume");
+  parseInputOptions(args, o);
+  if (o.packets()) {
+    const char* input = o.live ? "--live" : "--pcap";
+    if (args.positional.size() == 2)
+      throw InputError(std::string(input) + " reads the frames: give OUT only, not SEQ ('" +
+                       args.positional[0] + "') as well");
+    if (args.positional.size() != 1)
+      throw InputError(std::string("expected 1 argument OUT with ") + input + ", got " +
+                       std::to_string(args.positional.size()));
+    o.out = args.positional[0];
+  } else {
+    if (args.positional.size() != 2) {
+      printHelp(argv[0]);
+      throw InputError("expected 2 arguments SEQ OUT (or --pcap FILE OUT, --live OUT), got " +
+                       std::to_string(args.positional.size()));
+    }
+    o.seq = args.positional[0];
+    o.out = args.positional[1];
   }
-  o.seq = args.positional[0];
-  o.out = args.positional[1];
   o.overwrite = args.has("--overwrite");
   o.labelled = args.has("--labelled-clouds");
   o.point_labels = args.has("--point-labels");
   o.input.rate_hz = o.rate;
   o.skip_bad = args.has("--skip-bad-frames");
-  o.resume = args.has("--resume");
   if (o.resume && o.overwrite)
     throw InputError("--resume continues the run in OUT; it cannot be combined with --overwrite");
   return true;
@@ -390,16 +500,20 @@ std::string hashHex(const std::string& text) {
 
 /** What a resumed run must share with the run it continues: the input (path, frame files and
  * their sizes), the frame rate, the options that change the output, and every parameter. */
-std::string runKey(const Options& o, const pcl_movers::io::SequenceReader& reader) {
+std::string runKey(const Options& o, const pcl_movers::io::SequenceReader* reader) {
   std::ostringstream key;
   std::error_code ec;
-  key << fs::weakly_canonical(o.seq, ec).string() << "\nrate " << o.rate << "\nestimate "
-      << o.force_estimate << "\nlabelled " << o.labelled << "\nskip_bad " << o.skip_bad
-      << "\nposes " << o.input.poses_path << " " << static_cast<int>(o.input.poses_format) << " "
-      << o.input.calib_path << "\n";
+  key << (o.live ? o.inputName() : fs::weakly_canonical(o.inputName(), ec).string()) << "\nrate "
+      << o.rate << "\nestimate " << o.force_estimate << "\nlabelled " << o.labelled << "\nskip_bad "
+      << o.skip_bad << "\nposes " << o.input.poses_path << " "
+      << static_cast<int>(o.input.poses_format) << " " << o.input.calib_path << "\n";
   if (o.point_labels) key << "point_labels 1\n";  // absent otherwise: older run keys unchanged
-  for (const auto& path : reader.framePaths())
-    key << fs::path(path).filename().string() << " " << fs::file_size(path, ec) << "\n";
+  if (reader)
+    for (const auto& path : reader->framePaths())
+      key << fs::path(path).filename().string() << " " << fs::file_size(path, ec) << "\n";
+  if (!o.pcap.empty())  // absent for folders: their run keys unchanged
+    key << "pcap " << fs::file_size(o.pcap, ec) << " calibration " << o.calibration << "\n";
+  if (o.frames > 0 || o.duration > 0) key << "frames " << o.frames << " " << o.duration << "\n";
   key << o.params.toConfig();
   return hashHex(key.str());
 }
@@ -447,6 +561,8 @@ struct RunState {
   std::set<int> track_ids, mover_ids;
   std::size_t rows = 0;
   std::string deskew = "{}";  ///< ScanDeskewer::toJson()
+  std::string input = "{}";   ///< what the frames came from, read, dropped (DetectRun::inputJson)
+  std::size_t dropped = 0;    ///< sweeps dropped because detection fell behind (--live)
 };
 
 std::string timingsJson(const RunState& st, bool estimate) {
@@ -473,7 +589,7 @@ std::string timingsJson(const RunState& st, bool estimate) {
 void writeSummary(const Options& o, std::size_t frames, const RunState& st,
                   const std::string& state, int signal, bool estimate) {
   std::ostringstream js;
-  js << "{\n  \"sequence\": " << jsonString(o.seq) << ",\n  \"frames\": " << frames
+  js << "{\n  \"sequence\": " << jsonString(o.inputName()) << ",\n  \"frames\": " << frames
      << ",\n  \"state\": \"" << state
      << "\",\n  \"interrupted\": " << (state == "finished" ? "false" : "true");
   if (signal != 0)
@@ -487,7 +603,8 @@ void writeSummary(const Options& o, std::size_t frames, const RunState& st,
      << ",\n  \"blind_frame_count\": " << st.blind.size() << ",\n  \"deskew\": " << st.deskew
      << ",\n  \"bad_frames\": " << jsonList(st.bad) << ",\n  \"bad_frame_count\": " << st.bad.size()
      << ",\n  \"rows\": " << st.rows << ",\n  \"tracks\": " << st.track_ids.size()
-     << ",\n  \"movers\": " << st.mover_ids.size() << ",\n  \"timings_ms\": {"
+     << ",\n  \"movers\": " << st.mover_ids.size() << ",\n  \"input\": " << st.input
+     << ",\n  \"dropped_frames\": " << st.dropped << ",\n  \"timings_ms\": {"
      << timingsJson(st, estimate) << "\n  },\n  \"parameters\": " << o.params.toJson() << "\n}\n";
   const std::string path = o.out + "/summary.json", tmp = path + ".tmp";
   {
@@ -640,14 +757,131 @@ class TracksFile {
   std::uintmax_t kept_size_ = 0;
 };
 
+// ------------------------------------------------------------------ input frames
+/** One frame as the reading thread hands it to detection. */
+struct InputFrame {
+  std::size_t sweep = 0;  ///< index in the input: the folder's frame, the capture's full sweep
+  pcl::PointCloud<PointT>::Ptr scan;
+  bool readable = true;
+  std::string error;                ///< why it could not be read (--skip-bad-frames)
+  double time = 0;                  ///< sweeps: first firing [s past the hour, sensor clock]
+  std::vector<float> time_offsets;  ///< sweeps: per point [s after `time`], NaN without return
+};
+
+/** Frame i of a folder, read on the reading thread; with --skip-bad-frames a malformed one is
+ * handed on as unreadable (detection warns and counts it). */
+InputFrame readFolderFrame(const pcl_movers::io::SequenceReader& reader, std::size_t i,
+                           bool skip_bad) {
+  InputFrame f;
+  f.sweep = i;
+  f.scan.reset(new pcl::PointCloud<PointT>);
+  const std::string& path = reader.framePaths()[i];
+  try {
+    reader.read(i, *f.scan);
+    checkFinite(*f.scan, path);
+  } catch (const InputError& e) {
+    if (!skip_bad) throw;
+    f.readable = false;
+    f.error = e.what();
+    f.scan->clear();
+    return f;
+  }
+  // The scan is in the sensor frame; its VIEWPOINT (if any) is the pose.
+  f.scan->sensor_origin_.setZero();
+  f.scan->sensor_orientation_.setIdentity();
+  return f;
+}
+
+/** The Velodyne model of --sensor (auto: from the capture's first data packet). */
+pcl_movers::io::VelodyneModel velodyneModelOf(const Options& o) {
+  if (o.params.sensor == "auto") return pcl_movers::io::detectVelodyneModel(o.pcap);
+  return pcl_movers::io::velodyneModelFromName(o.params.sensor);
+}
+
+/** --poses for a capture's sweeps: one per sweep (kitti, kitti-camera) or by time (tum). */
+class SweepPoses {
+ public:
+  explicit SweepPoses(const pcl_movers::io::SequenceOptions& in) : path_(in.poses_path) {
+    using pcl_movers::io::PoseFormat;
+    if (path_.empty() || !in.load_poses) return;
+    format_ = in.poses_format;
+    if (format_ == PoseFormat::tum) {
+      stamped_ = pcl_movers::io::readTumPoses(path_);
+      if (stamped_.empty()) throw InputError(path_, 0, "no pose");
+      return;
+    }
+    indexed_ = pcl_movers::io::readPoses(path_);
+    if (format_ == PoseFormat::kitti_camera)
+      indexed_ = pcl_movers::io::cameraToVelodynePoses(
+          indexed_, pcl_movers::io::readKittiCalibTr(in.calib_path));
+    if (indexed_.empty()) throw InputError(path_, 0, "no pose");
+  }
+  bool empty() const { return indexed_.empty() && stamped_.empty(); }
+  std::string source() const {
+    const char* names[] = {"kitti", "tum", "kitti-camera"};
+    return path_ + " (" + names[static_cast<int>(format_)] + ")";
+  }
+  /** The pose of sweep `sweep`, which started at `time`. */
+  Eigen::Isometry3d at(std::size_t sweep, double time) const {
+    if (!stamped_.empty())
+      return pcl_movers::io::posesAtTimes(stamped_, {time}, path_, kTolerance).front();
+    if (sweep >= indexed_.size())
+      throw InputError(path_, 0,
+                       "has " + std::to_string(indexed_.size()) + " poses; the capture has sweep " +
+                           std::to_string(sweep) + " (one pose per sweep)");
+    return indexed_[sweep];
+  }
+
+ private:
+  static constexpr double kTolerance = 0.1;  ///< [s] a sweep's time to its nearest TUM pose
+  std::string path_;
+  pcl_movers::io::PoseFormat format_ = pcl_movers::io::PoseFormat::kitti;
+  std::vector<Eigen::Isometry3d> indexed_;
+  std::vector<pcl_movers::io::StampedPose> stamped_;
+};
+
+/** Duration of a sweep: its last firing's time offset (0 when it has no return). */
+double sweepDuration(const std::vector<float>& time_offsets) {
+  float last = 0.f;
+  for (const float t : time_offsets)
+    if (std::isfinite(t)) last = std::max(last, t);
+  return last;
+}
+
+/** The capture of --pcap / --live. */
+std::unique_ptr<pcl_movers::io::VelodyneCapture> openCapture(const Options& o) {
+  const auto model = velodyneModelOf(o);
+  if (o.live)
+    return pcl_movers::io::VelodyneCapture::listen(o.port, model, o.calibration, o.timeout);
+  return std::make_unique<pcl_movers::io::VelodyneCapture>(o.pcap, model, o.calibration);
+}
+
 // ------------------------------------------------------------------ the run
 class DetectRun {
  public:
-  DetectRun(const Options& o, const pcl_movers::io::SequenceReader& reader)
-      : o_(o), reader_(reader), estimate_(o.force_estimate || !reader.hasPoses()) {
+  /** `reader`: the sequence folder, or null with --pcap/--live (`capture`). */
+  DetectRun(const Options& o, const pcl_movers::io::SequenceReader* reader,
+            std::unique_ptr<pcl_movers::io::VelodyneCapture> capture)
+      : o_(o),
+        reader_(reader),
+        capture_(std::move(capture)),
+        sweep_poses_(o.input),
+        estimate_(o.force_estimate || (reader ? !reader->hasPoses() : sweep_poses_.empty())) {
     st_.run_key = runKey(o, reader);
-    st_.pose_source = estimate_ ? "estimated" : reader.poseSource();
+    st_.pose_source = estimate_ ? "estimated"
+                      : reader  ? reader->poseSource()
+                                : sweep_poses_.source();
     if (o.params.sensor != "auto") st_.sensor = o.params.sensor;
+    if (capture_) {
+      st_.sensor = pcl_movers::io::velodyneModelName(velodyneModelOf(o)) +
+                   (o.live ? ": live packets" : ": packet capture") + " (" +
+                   std::to_string(capture_->getSensorModel().rows()) + " x " +
+                   std::to_string(capture_->getColumns()) + " organized sweeps)";
+      if (o.params.deskew == "on" && estimate_)
+        throw InputError(
+            "--deskew on: de-skewing a capture's sweeps needs their poses (--poses); "
+            "estimated poses come from the skewed sweeps");
+    }
     detector_.setParameters(o.params);
   }
 
@@ -655,24 +889,45 @@ class DetectRun {
   int run();
 
  private:
+  std::unique_ptr<pcl_movers::io::FrameStream<InputFrame>> openStream();
   void prepare();
   void cleanUp();
-  bool readFrame(std::size_t i, pcl::PointCloud<PointT>& scan);
-  void processFrame(std::size_t i);
+  void processFrame(std::size_t i, InputFrame& frame);
+  void applyDeskew(std::size_t i, InputFrame& frame, const Eigen::Isometry3d& pose);
   void replayFrame(std::size_t i, const Detector::FrameResult& result);
   void reportSensor(std::size_t i, const pcl::PointCloud<PointT>& scan);
+  void reportStream(bool last);
+  std::string inputJson() const;
   template <typename Write>
   void writeFrameFile(std::size_t i, const std::string& path, Write&& write);
   void clearEarlierOutputs() const;
-  std::string labelledPath(std::size_t i) const {
-    return o_.out + "/labelled/" + reader_.frameName(i) + ".pcd";
+  std::size_t knownFrames() const { return reader_ ? reader_->size() : st_.frames_done; }
+  /** Output name of input frame `sweep`: the folder's file name, or the sweep index NNNNNN. */
+  std::string frameName(std::size_t sweep) const {
+    if (reader_) return reader_->frameName(sweep);
+    std::ostringstream name;
+    name << std::setw(6) << std::setfill('0') << sweep;
+    return name.str();
   }
-  std::string pointLabelsPath(std::size_t i) const {
-    return o_.out + "/labels/" + reader_.frameName(i) + ".label";
+  long long frameNumber(std::size_t sweep) const {
+    return reader_ ? reader_->frameNumber(sweep) : static_cast<long long>(sweep);
+  }
+  /** The input frame `sweep` named for messages. */
+  std::string framePath(std::size_t sweep) const {
+    return reader_ ? reader_->framePaths()[sweep]
+                   : o_.inputName() + " sweep " + std::to_string(sweep);
+  }
+  std::string labelledPath(std::size_t sweep) const {
+    return o_.out + "/labelled/" + frameName(sweep) + ".pcd";
+  }
+  std::string pointLabelsPath(std::size_t sweep) const {
+    return o_.out + "/labels/" + frameName(sweep) + ".label";
   }
 
   const Options& o_;
-  const pcl_movers::io::SequenceReader& reader_;
+  const pcl_movers::io::SequenceReader* reader_;
+  std::unique_ptr<pcl_movers::io::VelodyneCapture> capture_;
+  const SweepPoses sweep_poses_;
   const bool estimate_;
   Detector detector_;
   pcl_movers::EgoMotionEstimator<PointT> ego_;
@@ -685,6 +940,12 @@ class DetectRun {
   bool created_labels_dir_ = false;
   std::vector<std::string> created_;      ///< files a failure removes
   std::vector<std::string> frames_json_;  ///< tracks.json, one object per frame so far
+  // Streaming (reading thread → detection).
+  std::unique_ptr<pcl_movers::io::FrameStream<InputFrame>> stream_;
+  std::chrono::steady_clock::time_point started_, last_report_;
+  double wall_seconds_ = 0;
+  pcl_movers::StampedPose previous_pose_;  ///< sweeps: the previous detected sweep's pose
+  std::size_t sweeps_deskewed_ = 0, sweeps_without_poses_ = 0;
 };
 
 /** --overwrite: removes what an earlier run of this tool wrote in OUT (tracks.csv, tracks.json,
@@ -722,7 +983,8 @@ void DetectRun::prepare() {
     created_.push_back(tracks_path);
     tracks_.create(tracks_path);
     created_.push_back(o_.out + "/summary.json");
-    writeSummary(o_, reader_.size(), st_, "running", 0, estimate_);
+    st_.input = inputJson();
+    writeSummary(o_, knownFrames(), st_, "running", 0, estimate_);
   }
   const std::string labelled_dir = o_.out + "/labelled";
   if (o_.labelled && !fs::exists(labelled_dir)) {
@@ -750,26 +1012,70 @@ void DetectRun::cleanUp() {
   if (!out_existed_) fs::remove(o_.out, ec);  // only removes it when empty
 }
 
-/** Reads frame i; false for a malformed frame skipped with --skip-bad-frames. */
-bool DetectRun::readFrame(std::size_t i, pcl::PointCloud<PointT>& scan) {
-  const std::string& path = reader_.framePaths()[i];
-  try {
-    reader_.read(i, scan);
-    checkFinite(scan, path);
-  } catch (const InputError& e) {
-    if (!o_.skip_bad) throw;
-    pcl::console::print_warn(
-        "[pcl_movers_detect] warning: %s; frame %zu skipped "
-        "(--skip-bad-frames), its tracks coast\n",
-        e.what(), i);
-    st_.bad.push_back(i);
-    scan.clear();
-    return false;
+/** The reading thread: a folder's frames or the capture's sweeps, --frames/--duration applied.
+ * Files wait for detection (nothing is lost); a live sensor drops its oldest waiting sweep. */
+std::unique_ptr<pcl_movers::io::FrameStream<InputFrame>> DetectRun::openStream() {
+  using pcl_movers::io::QueuePolicy;
+  const std::size_t limit = o_.frames > 0 ? static_cast<std::size_t>(o_.frames) : SIZE_MAX;
+  const auto deadline =
+      o_.duration > 0 ? started_ + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                       std::chrono::duration<double>(o_.duration))
+                      : std::chrono::steady_clock::time_point::max();
+  auto in_bounds = [=](std::size_t read) {
+    return read < limit && std::chrono::steady_clock::now() < deadline;
+  };
+  if (reader_) {
+    auto next = std::make_shared<std::size_t>(0);
+    return std::make_unique<pcl_movers::io::FrameStream<InputFrame>>(
+        [this, next, in_bounds](InputFrame& f) {
+          if (*next >= reader_->size() || !in_bounds(*next)) return false;
+          f = readFolderFrame(*reader_, (*next)++, o_.skip_bad);
+          return true;
+        },
+        o_.queue, QueuePolicy::kBlock);
   }
-  // The scan is in the sensor frame; its VIEWPOINT (if any) is the pose.
-  scan.sensor_origin_.setZero();
-  scan.sensor_orientation_.setIdentity();
-  return true;
+  auto read = std::make_shared<std::size_t>(0);
+  pcl_movers::io::VelodyneCapture* capture = capture_.get();
+  return std::make_unique<pcl_movers::io::FrameStream<InputFrame>>(
+      [capture, read, in_bounds](InputFrame& f) {
+        pcl_movers::io::VelodyneSweep sweep;
+        if (!in_bounds(*read) || !capture->next(sweep)) return false;
+        f.sweep = (*read)++;
+        f.scan = sweep.cloud;
+        f.time = sweep.start_time;
+        f.time_offsets = std::move(sweep.time_offsets);
+        return true;
+      },
+      o_.queue, o_.live ? QueuePolicy::kDropOldest : QueuePolicy::kBlock,
+      [capture] { capture->stop(); });
+}
+
+/** Reading state for summary.json: what the frames came from, read, dropped, queue, wall time. */
+std::string DetectRun::inputJson() const {
+  std::ostringstream js;
+  const char* kind = o_.live ? "live" : o_.pcap.empty() ? "folder" : "pcap";
+  const std::size_t read = stream_ ? stream_->producedCount() : 0;
+  const std::size_t dropped = stream_ ? stream_->droppedCount() : 0;
+  js << "{\"kind\": \"" << kind << "\", \"source\": " << jsonString(o_.inputName())
+     << ", \"frames_read\": " << read << ", \"dropped_frames\": " << dropped
+     << ", \"queue_capacity\": " << o_.queue << ", \"queue_policy\": \""
+     << (o_.live ? "drop-oldest" : "block") << "\"";
+  if (capture_)
+    js << ", \"packets\": " << capture_->getPacketCount()
+       << ", \"partial_sweeps\": " << capture_->getPartialSweepCount();
+  js << ", \"wall_seconds\": " << jsonNumber(wall_seconds_, "%.3f") << "}";
+  return js.str();
+}
+
+/** A progress line for --pcap/--live: once a second, and at the end. */
+void DetectRun::reportStream(bool last) {
+  if (!stream_ || reader_) return;
+  const auto now = std::chrono::steady_clock::now();
+  if (!last && now - last_report_ < std::chrono::seconds(1)) return;
+  last_report_ = now;
+  print_info("%s: %zu sweeps read, %zu detected, %zu dropped (detection behind)\n",
+             o_.inputName().c_str(), stream_->producedCount(), st_.frames_done,
+             stream_->droppedCount());
 }
 
 /** Prints the beam layout once it is known ("auto" estimates it from the first usable scan). */
@@ -783,7 +1089,7 @@ void DetectRun::reportSensor(std::size_t i, const pcl::PointCloud<PointT>& scan)
   char buf[300];
   const int n =
       std::snprintf(buf, sizeof(buf), "estimated from %s: %d beams, %.2f to %.2f deg, %d columns",
-                    fs::path(reader_.framePaths()[i]).filename().c_str(), est.rows(),
+                    fs::path(framePath(i)).filename().c_str(), est.rows(),
                     est.elevations().front() * 180.0 / M_PI, est.elevations().back() * 180.0 / M_PI,
                     est.columns());
   if (model.name() != est.name() && n > 0 && n < static_cast<int>(sizeof(buf)))
@@ -825,12 +1131,60 @@ void DetectRun::replayFrame(std::size_t i, const Detector::FrameResult& result) 
   }
 }
 
-void DetectRun::processFrame(std::size_t i) {
-  pcl::PointCloud<PointT>::Ptr scan(new pcl::PointCloud<PointT>);
-  const bool readable = readFrame(i, *scan);
+/** De-skews frame i (pose `pose`): a folder's frames with their PCD's times (ScanDeskewer), a
+ * capture's sweeps with their packets' firing times and the neighbouring sweep's pose. */
+void DetectRun::applyDeskew(std::size_t i, InputFrame& f, const Eigen::Isometry3d& pose) {
+  if (reader_) {
+    const std::size_t j = i > 0 ? i - 1 : i + 1;  // previous pose; the next one at the first frame
+    pcl_movers::StampedPose other;
+    if (!estimate_ && j < reader_->size()) other = {reader_->pose(j), reader_->time(j), true};
+    deskew_.apply(reader_->framePaths()[i], *f.scan, {pose, f.time, true}, other);
+    st_.deskew = deskew_.toJson();
+    return;
+  }
+  const pcl_movers::StampedPose frame{pose, f.time, !estimate_};
+  pcl_movers::StampedPose other = previous_pose_;
+  const double duration = sweepDuration(f.time_offsets);
+  if (!other.valid && frame.valid && duration > 0) {  // the first sweep: its end's pose
+    try {
+      other = {sweep_poses_.at(f.sweep + 1, f.time + duration), f.time + duration, true};
+    } catch (const InputError&) {  // no pose after the first sweep: it stays as it is
+    }
+  }
+  previous_pose_ = frame;
+  if (o_.params.deskew != "off") {
+    if (frame.valid && other.valid && other.time != frame.time) {
+      pcl_movers::deskewScan(*f.scan, f.time_offsets, frame, other);
+      ++sweeps_deskewed_;
+    } else {
+      ++sweeps_without_poses_;
+    }
+  }
+  std::ostringstream js;
+  js << "{\"mode\": \"" << o_.params.deskew << "\", \"time_field\": \""
+     << (o_.params.deskew == "off" ? "" : "packets") << "\", \"frames\": " << sweeps_deskewed_
+     << ", \"without_times\": 0, \"without_poses\": " << sweeps_without_poses_ << "}";
+  st_.deskew = js.str();
+}
+
+void DetectRun::processFrame(std::size_t i, InputFrame& f) {
+  const std::size_t sweep = f.sweep;
+  if (reader_) f.time = reader_->time(sweep);
+  if (!f.readable) {
+    pcl::console::print_warn(
+        "[pcl_movers_detect] warning: %s; frame %zu skipped "
+        "(--skip-bad-frames), its tracks coast\n",
+        f.error.c_str(), i);
+    st_.bad.push_back(i);
+  }
+  const bool readable = f.readable;
+  pcl::PointCloud<PointT>::Ptr scan = f.scan;
   std::vector<bool> has_return;  // before de-skewing moves the points
   if (o_.point_labels && readable) has_return = returnsOf(*scan);
-  Eigen::Isometry3d pose = estimate_ ? Eigen::Isometry3d::Identity() : reader_.pose(i);
+  pcl::PCLPointCloud2 sweep_blob;  // a sweep as read, for its labelled cloud
+  if (o_.labelled && !reader_) pcl::toPCLPointCloud2(*scan, sweep_blob);
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  if (!estimate_) pose = reader_ ? reader_->pose(sweep) : sweep_poses_.at(sweep, f.time);
   double ego_ms = 0;
   if (estimate_) {
     const auto t0 = std::chrono::steady_clock::now();
@@ -841,28 +1195,23 @@ void DetectRun::processFrame(std::size_t i) {
     ego_ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   }
-  const std::size_t j = i > 0 ? i - 1 : i + 1;  // previous pose; the next one at the first frame
-  pcl_movers::StampedPose other;
-  if (!estimate_ && j < reader_.size()) other = {reader_.pose(j), reader_.time(j), true};
-  if (readable) deskew_.apply(reader_.framePaths()[i], *scan, {pose, reader_.time(i), true}, other);
-  st_.deskew = deskew_.toJson();
+  if (readable) applyDeskew(i, f, pose);
   Detector::FrameResult result;
   try {
-    detector_.process(scan, pose, reader_.time(i), static_cast<int>(i), result);
+    detector_.process(scan, pose, f.time, static_cast<int>(i), result);
   } catch (const InputError& e) {
-    throw InputError(reader_.framePaths()[i] + ": " + e.what());
+    throw InputError(framePath(sweep) + ": " + e.what());
   }
-  for (auto& r : result.rows) r.file = reader_.frameNumber(i);
-  frames_json_.push_back(
-      frameJson(i, reader_.frameNumber(i), reader_.time(i), result.blind, result.rows));
+  for (auto& r : result.rows) r.file = frameNumber(sweep);
+  frames_json_.push_back(frameJson(i, frameNumber(sweep), f.time, result.blind, result.rows));
   if (result.blind && readable) {
     pcl::console::print_warn(
         "[pcl_movers_detect] warning: frame %zu (%s) is blind (%s); its "
         "tracks coast\n",
-        i, reader_.framePaths()[i].c_str(), result.blind_reason.c_str());
+        i, framePath(sweep).c_str(), result.blind_reason.c_str());
     st_.blind.push_back(i);
   }
-  reportSensor(i, *scan);
+  reportSensor(sweep, *scan);
   for (const auto& t : detector_.getTimings()) st_.stage_ms[t.first].push_back(t.second);
   if (estimate_ && !result.blind) st_.stage_ms["ego_motion"].push_back(ego_ms);
   for (const auto& r : result.rows) {
@@ -870,17 +1219,20 @@ void DetectRun::processFrame(std::size_t i) {
     if (r.mover) st_.mover_ids.insert(r.track_id);
   }
   st_.rows += result.rows.size();
-  const std::string& input = reader_.framePaths()[i];
   if (o_.labelled)
-    writeFrameFile(i, labelledPath(i), [&](const std::string& tmp) {
-      if (readable)
-        writeLabelledCloud(tmp, input, result);
+    writeFrameFile(i, labelledPath(sweep), [&](const std::string& tmp) {
+      if (!reader_)
+        writeLabelledCloud(tmp, sweep_blob, result);
+      else if (readable)
+        writeLabelledCloud(tmp, reader_->framePaths()[sweep], result);
       else
         writeEmptyLabelledCloud(tmp);
     });
   if (o_.point_labels)
-    writeFrameFile(i, pointLabelsPath(i), [&](const std::string& tmp) {
-      writePointLabels(tmp, has_return, readable ? 0 : declaredPoints(input), result);
+    writeFrameFile(i, pointLabelsPath(sweep), [&](const std::string& tmp) {
+      writePointLabels(tmp, has_return,
+                       readable || !reader_ ? 0 : declaredPoints(reader_->framePaths()[sweep]),
+                       result);
     });
   if (i < prev_.frames_done)
     replayFrame(i, result);
@@ -890,10 +1242,18 @@ void DetectRun::processFrame(std::size_t i) {
 }
 
 int DetectRun::run() {
-  print_info("Sequence ");
-  print_value("%s", o_.seq.c_str());
-  print_info(": %zu frames, poses: %s, mode: %s\n", reader_.size(), st_.pose_source.c_str(),
-             o_.params.mode.c_str());
+  if (reader_) {
+    print_info("Sequence ");
+    print_value("%s", o_.seq.c_str());
+    print_info(": %zu frames, poses: %s, mode: %s\n", reader_->size(), st_.pose_source.c_str(),
+               o_.params.mode.c_str());
+  } else {
+    print_info(o_.live ? "Live sensor on " : "Capture ");
+    print_value("%s", o_.inputName().c_str());
+    print_info(": %s, poses: %s, mode: %s\n", st_.sensor.c_str(), st_.pose_source.c_str(),
+               o_.params.mode.c_str());
+  }
+  started_ = last_report_ = std::chrono::steady_clock::now();
   try {
     prepare();
     if (o_.resume)
@@ -903,29 +1263,52 @@ int DetectRun::run() {
           prev_.frames_done, prev_.frames_done);
     if (o_.resume && prev_.frames_done == 0) tracks_.resume(o_.out + "/tracks.csv", {});
     st_.frames_done = prev_.frames_done;
-    pcl_movers::tools::ProgressBar progress(reader_.size());
-    for (std::size_t i = 0; i < reader_.size() && g_stop_signal == 0; ++i) {
-      processFrame(i);
-      progress.update(i + 1);
+    pcl_movers::tools::ProgressBar progress(reader_ ? reader_->size() : 0, "frames",
+                                            false);  // folders only: captures print lines
+    stream_ = openStream();
+    InputFrame frame;
+    for (std::size_t i = 0; g_stop_signal == 0; ++i) {
+      try {
+        if (!stream_->next(frame)) break;
+      } catch (const InputError& e) {
+        if (!o_.live || st_.frames_done == 0) throw;
+        pcl::console::print_warn("[pcl_movers_detect] warning: %s; the run ends\n", e.what());
+        break;
+      }
+      processFrame(i, frame);
+      if (reader_) progress.update(i + 1);
+      reportStream(false);
       if (o_.stop_after > 0 && static_cast<long>(i) + 1 == o_.stop_after) g_stop_signal = SIGINT;
     }
-    progress.finish();
-    if (g_stop_signal == 0 && st_.blind.size() + st_.bad.size() == reader_.size())
-      throw InputError(o_.seq, 0,
-                       "no frame has a return (all " + std::to_string(reader_.size()) +
+    stream_->stop();
+    if (reader_) progress.finish();
+    reportStream(true);
+    if (capture_ && st_.frames_done == 0 && g_stop_signal == 0)
+      throw InputError(o_.inputName(), 0,
+                       "no full sweep in " + std::to_string(capture_->getPacketCount()) +
+                           " data packets (a sweep is one turn between two azimuth wraps)");
+    if (g_stop_signal == 0 && st_.frames_done > 0 &&
+        st_.blind.size() + st_.bad.size() == st_.frames_done)
+      throw InputError(o_.inputName(), 0,
+                       "no frame has a return (all " + std::to_string(st_.frames_done) +
                            " frames are blind or bad)");
   } catch (...) {
+    if (stream_) stream_->stop();
     cleanUp();
     throw;
   }
+  wall_seconds_ =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
+  st_.input = inputJson();
+  st_.dropped = stream_->droppedCount();
   const int signal = g_stop_signal;
   writeTracksJson(o_.out + "/tracks.json", frames_json_);
-  writeSummary(o_, reader_.size(), st_, signal ? "interrupted" : "finished", signal, estimate_);
+  writeSummary(o_, knownFrames(), st_, signal ? "interrupted" : "finished", signal, estimate_);
   if (signal != 0) {
     pcl::console::print_warn(
         "[pcl_movers_detect] interrupted by %s after %zu of %zu frames: "
         "%s/tracks.csv holds frames 0-%ld; continue with --resume\n",
-        signal == SIGTERM ? "SIGTERM" : "SIGINT", st_.frames_done, reader_.size(), o_.out.c_str(),
+        signal == SIGTERM ? "SIGTERM" : "SIGINT", st_.frames_done, knownFrames(), o_.out.c_str(),
         static_cast<long>(st_.frames_done) - 1);
     return 128 + signal;
   }
@@ -933,9 +1316,10 @@ int DetectRun::run() {
   print_value("%s/tracks.csv", o_.out.c_str());
   print_info(
       ": %zu rows, %zu tracks, %zu movers, %zu blind and %zu bad frames; median %.1f "
-      "ms/frame (pipeline, without I/O)\n",
+      "ms/frame (pipeline, without I/O), %.1f ms/frame wall\n",
       st_.rows, st_.track_ids.size(), st_.mover_ids.size(), st_.blind.size(), st_.bad.size(),
-      median(st_.stage_ms["total"]));
+      median(st_.stage_ms["total"]),
+      st_.frames_done ? 1000.0 * wall_seconds_ / static_cast<double>(st_.frames_done) : 0.0);
   return 0;
 }
 
@@ -946,6 +1330,16 @@ int run(int argc, char** argv) {
   }
   Options o;
   if (!parseOptions(argc, argv, o)) return 0;
+  if (o.packets()) {
+    if (fs::exists(o.out) && !fs::is_directory(o.out))
+      throw InputError(o.out, 0, "output exists and is not a folder");
+    if (!o.pcap.empty() && !fs::is_regular_file(o.pcap))
+      throw InputError(o.pcap, 0,
+                       fs::exists(o.pcap) ? "--pcap: not a file" : "--pcap: does not exist");
+    installStopHandlers();
+    DetectRun detect(o, nullptr, openCapture(o));
+    return detect.run();
+  }
   if (!fs::is_directory(o.seq) && (fs::exists(o.seq) || pcl_movers::io::isScanFile(o.seq)))
     throw InputError(o.seq, 0,
                      std::string(fs::exists(o.seq) ? "is a file" : "does not exist") +
@@ -957,7 +1351,7 @@ int run(int argc, char** argv) {
   if (fs::exists(o.out) && fs::equivalent(o.out, o.seq))
     throw InputError(o.out, 0, "output folder is the input sequence");
   installStopHandlers();
-  DetectRun detect(o, reader);
+  DetectRun detect(o, &reader, nullptr);
   return detect.run();
 }
 

@@ -8,9 +8,12 @@
 #include "velodyne_decoder.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <cstdio>
 #include <deque>
+#include <exception>
 #include <limits>
 #include <mutex>
 #include <numeric>
@@ -64,7 +67,8 @@ std::uint32_t little32(const std::uint8_t* p) {
 
 /** Decodes packets into organized sweeps; shared by the file path and the grabber's thread. */
 struct VelodyneCapture::Impl {
-  Impl(VelodyneModel model, const std::string& calibration, const std::string& pcap_path);
+  Impl(VelodyneModel model, const std::string& calibration, const std::string& pcap_path,
+       int live_port = -1);
 
   void setColumns(int columns);
   void addPacket(const std::uint8_t* data, double capture_time);
@@ -82,6 +86,14 @@ struct VelodyneCapture::Impl {
   std::size_t packets_ = 0, partial_ = 0, bad_blocks_ = 0, other_ = 0;
   std::unique_ptr<PcapReader> reader_;  ///< the file path; none for the grabber's thread
   UdpDatagram datagram_;
+  // Live capture (listen()): packets arrive on the grabber's thread.
+  int live_port_ = -1;
+  double timeout_seconds_ = 5.0;
+  std::mutex mutex_;
+  std::condition_variable sweep_done_;
+  bool stopped_ = false;
+  std::exception_ptr live_error_;  ///< thrown on the grabber's thread, rethrown by next()
+  std::chrono::steady_clock::time_point last_packet_;
 
  private:
   void addHdl(const std::uint8_t* data, double stamp);
@@ -105,11 +117,12 @@ struct VelodyneCapture::Impl {
 };
 
 VelodyneCapture::Impl::Impl(VelodyneModel model, const std::string& calibration,
-                            const std::string& pcap_path)
+                            const std::string& pcap_path, int live_port)
     : model_(model),
       path_(pcap_path),
-      decoder_(model, calibration, pcap_path),
+      decoder_(model, calibration, pcap_path, live_port),
       sensor_(velodyneSensorModel(model)) {
+  live_port_ = live_port;
   const auto& lasers = decoder_.lasers();
   std::vector<int> order(lasers.size());
   std::iota(order.begin(), order.end(), 0);
@@ -310,7 +323,10 @@ VelodyneCapture::VelodyneCapture(const std::string& pcap_path, VelodyneModel mod
   impl_->reader_ = std::move(reader);
 }
 
-VelodyneCapture::~VelodyneCapture() = default;
+VelodyneCapture::~VelodyneCapture() {
+  // Before the members the grabber's thread uses go away.
+  if (impl_ && impl_->live_port_ >= 0) impl_->decoder_.stopListening();
+}
 
 void VelodyneCapture::setColumns(int columns) {
   impl_->setColumns(columns);
@@ -340,10 +356,79 @@ std::size_t VelodyneCapture::getOtherDatagramCount() const {
   return impl_->other_;
 }
 bool VelodyneCapture::isTruncated() const {
-  return impl_->reader_->isTruncated();
+  return impl_->reader_ && impl_->reader_->isTruncated();
+}
+
+bool VelodyneCapture::isLive() const {
+  return impl_->live_port_ >= 0;
+}
+
+std::unique_ptr<VelodyneCapture> VelodyneCapture::listen(int port, VelodyneModel model,
+                                                         const std::string& calibration,
+                                                         double timeout_seconds) {
+  if (port < 0 || port > 65535)
+    throw InputError("--port " + std::to_string(port) + ": not a UDP port (0-65535)");
+  std::unique_ptr<VelodyneCapture> capture(new VelodyneCapture());
+  capture->impl_ = std::make_unique<Impl>(model, calibration, "", port);
+  Impl& impl = *capture->impl_;
+  impl.path_ = "UDP port " + std::to_string(port);
+  impl.timeout_seconds_ = timeout_seconds;
+  impl.last_packet_ = std::chrono::steady_clock::now();
+  impl.decoder_.listen([&impl](const std::uint8_t* data) {
+    std::lock_guard<std::mutex> lock(impl.mutex_);
+    if (impl.live_error_ || impl.stopped_) return;
+    impl.last_packet_ = std::chrono::steady_clock::now();
+    try {
+      const std::size_t before = impl.done_.size();
+      impl.addPacket(data, 0.0);
+      if (impl.done_.size() > before) impl.sweep_done_.notify_all();
+    } catch (...) {  // never through PCL's thread: next() rethrows it
+      impl.live_error_ = std::current_exception();
+      impl.sweep_done_.notify_all();
+    }
+  });
+  return capture;
+}
+
+void VelodyneCapture::stop() {
+  if (!isLive()) return;
+  {
+    std::lock_guard<std::mutex> lock(impl_->mutex_);
+    impl_->stopped_ = true;
+    impl_->sweep_done_.notify_all();
+  }
+}
+
+bool VelodyneCapture::nextLive(VelodyneSweep& sweep) {
+  Impl& impl = *impl_;
+  std::unique_lock<std::mutex> lock(impl.mutex_);
+  const auto timeout = std::chrono::duration<double>(impl.timeout_seconds_);
+  for (;;) {
+    if (impl.live_error_) std::rethrow_exception(impl.live_error_);
+    if (impl.stopped_) return false;
+    if (!impl.done_.empty()) break;
+    const auto deadline = impl.last_packet_ +
+                          std::chrono::duration_cast<std::chrono::steady_clock::duration>(timeout);
+    if (std::chrono::steady_clock::now() >= deadline) {
+      char seconds[32];
+      std::snprintf(seconds, sizeof(seconds), "%g", impl.timeout_seconds_);
+      throw InputError(
+          impl.path_, 0,
+          std::string("no Velodyne data packet for ") + seconds +
+              " s (--timeout): is the sensor sending to this port?" +
+              (impl.packets_ > 0 ? " (" + std::to_string(impl.packets_) + " packets came before)"
+                                 : ""));
+    }
+    impl.sweep_done_.wait_until(lock, std::min(deadline, std::chrono::steady_clock::now() +
+                                                             std::chrono::milliseconds(100)));
+  }
+  sweep = std::move(impl.done_.front());
+  impl.done_.pop_front();
+  return true;
 }
 
 bool VelodyneCapture::next(VelodyneSweep& sweep) {
+  if (isLive()) return nextLive(sweep);
   while (impl_->done_.empty()) {
     if (!impl_->reader_->next(impl_->datagram_)) {
       impl_->finishSweep(false);

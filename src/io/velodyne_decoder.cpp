@@ -11,9 +11,17 @@
 #include <boost/property_tree/ptree.hpp>
 #include <boost/property_tree/xml_parser.hpp>
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <algorithm>
 #include <atomic>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <set>
 #include <thread>
 
@@ -130,8 +138,10 @@ class DecodingGrabber : public GrabberT, public VelodyneDecoder::Access {
 }  // namespace
 
 VelodyneDecoder::VelodyneDecoder(VelodyneModel model, const std::string& calibration,
-                                 const std::string& pcap_path)
-    : model_(model) {
+                                 const std::string& pcap_path, int live_port)
+    : model_(model), live_port_(live_port) {
+  if (live_port > 65535)
+    throw InputError("--port " + std::to_string(live_port) + ": not a UDP port (0-65535)");
   if (!calibration.empty()) {
     if (model == VelodyneModel::kVlp16)
       throw InputError(calibration, 0,
@@ -143,15 +153,23 @@ VelodyneDecoder::VelodyneDecoder(VelodyneModel model, const std::string& calibra
         "hdl64: a calibration XML is required (--calib; VeloView/PCL db.xml format): PCL "
         "has no default HDL-64E table and decodes lasers 32-63 at elevation 0 without one");
   }
-  if (model == VelodyneModel::kVlp16)
+  const auto any = boost::asio::ip::address(boost::asio::ip::address_v4::any());
+  const auto port = static_cast<std::uint16_t>(std::max(live_port, 0));
+  if (model == VelodyneModel::kVlp16 && live_port >= 0)
+    grabber_ = std::make_unique<DecodingGrabber<pcl::VLPGrabber>>(any, port);
+  else if (model == VelodyneModel::kVlp16)
     grabber_ = std::make_unique<DecodingGrabber<pcl::VLPGrabber>>(pcap_path);
+  else if (live_port >= 0)
+    grabber_ = std::make_unique<DecodingGrabber<pcl::HDLGrabber>>(any, port, calibration);
   else
     grabber_ = std::make_unique<DecodingGrabber<pcl::HDLGrabber>>(calibration, pcap_path);
   for (int laser = 0; laser < laserCount(model); ++laser)
     lasers_.push_back(grabber_->correction(laser));
 }
 
-VelodyneDecoder::~VelodyneDecoder() = default;
+VelodyneDecoder::~VelodyneDecoder() {
+  stopListening();
+}
 
 void VelodyneDecoder::compute(std::uint16_t azimuth, std::uint16_t distance, std::uint8_t intensity,
                               int laser, pcl::PointXYZI& point) const {
@@ -175,6 +193,72 @@ std::size_t VelodyneDecoder::replay(const std::function<void(const std::uint8_t*
   grabber.stop();  // joins the grabber's threads: no sink call after this
   grabber_->setSink({});
   return packets;
+}
+
+namespace {
+
+/** Fails with a clear message when UDP `port` cannot be bound on every address (PCL's grabber
+ * only prints an error and does not start). */
+void checkPortFree(int port) {
+  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
+  if (fd < 0) throw InputError(std::string("cannot open a UDP socket: ") + std::strerror(errno));
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_addr.s_addr = htonl(INADDR_ANY);
+  address.sin_port = htons(static_cast<std::uint16_t>(port));
+  const int ok = ::bind(fd, reinterpret_cast<const sockaddr*>(&address), sizeof(address));
+  const int error = errno;
+  ::close(fd);
+  if (ok != 0)
+    throw InputError("--port " + std::to_string(port) + ": cannot listen on UDP port " +
+                     std::to_string(port) + " (" + std::strerror(error) +
+                     (error == EADDRINUSE ? ": another program receives on it" : "") + ")");
+}
+
+/** A 1-byte UDP datagram to 127.0.0.1:port (wakes a socket blocked in receive). */
+void sendWakeUp(int fd, int port) {
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  address.sin_port = htons(static_cast<std::uint16_t>(port));
+  const char byte = 0;
+  ::sendto(fd, &byte, 1, 0, reinterpret_cast<const sockaddr*>(&address), sizeof(address));
+}
+
+}  // namespace
+
+void VelodyneDecoder::listen(const std::function<void(const std::uint8_t*)>& sink) {
+  if (live_port_ < 0) throw InputError("VelodyneDecoder::listen: built for a capture file");
+  if (listening_) return;
+  checkPortFree(live_port_);
+  grabber_->setSink(sink);
+  grabber_->grabber().start();
+  if (!grabber_->grabber().isRunning()) {
+    grabber_->setSink({});
+    throw InputError("--port " + std::to_string(live_port_) +
+                     ": PCL's grabber could not bind "
+                     "UDP port " +
+                     std::to_string(live_port_));
+  }
+  listening_ = true;
+}
+
+void VelodyneDecoder::stopListening() {
+  if (!listening_) return;
+  std::atomic<bool> stopped{false};
+  std::thread waker([&] {
+    const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
+    while (!stopped) {
+      if (fd >= 0) sendWakeUp(fd, live_port_);
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    if (fd >= 0) ::close(fd);
+  });
+  grabber_->grabber().stop();
+  stopped = true;
+  waker.join();
+  grabber_->setSink({});
+  listening_ = false;
 }
 
 }  // namespace detail

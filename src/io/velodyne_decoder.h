@@ -42,9 +42,10 @@ void checkCalibrationFile(const std::string& path, int lasers);
 class VelodyneDecoder {
  public:
   /** \param calibration XML ("" = the grabber's default table), checked first
-   * \param pcap_path capture for replay() ("" = decoding only) */
+   * \param pcap_path capture for replay() ("" = decoding only)
+   * \param live_port UDP port for listen() (-1: none; the grabber is built for a file) */
   VelodyneDecoder(VelodyneModel model, const std::string& calibration,
-                  const std::string& pcap_path = "");
+                  const std::string& pcap_path = "", int live_port = -1);
   ~VelodyneDecoder();
 
   VelodyneModel model() const { return model_; }
@@ -61,10 +62,21 @@ class VelodyneDecoder {
   std::size_t replay(const std::function<void(const std::uint8_t*)>& sink,
                      std::size_t expected_packets, double timeout_seconds);
 
+  /** Starts the grabber's UDP thread (PCL's HDLGrabber/VLPGrabber(address, port), listening on
+   * every address): `sink` is called on the grabber's thread with each data packet. Throws
+   * InputError naming the port when it is in use or cannot be bound. */
+  void listen(const std::function<void(const std::uint8_t*)>& sink);
+  /** Stops listen(): joins the grabber's threads (no sink call after this). PCL's socket thread
+   * blocks in receive_from until a datagram comes, so 1-byte datagrams (ignored: not 1206 bytes)
+   * are sent to 127.0.0.1:port until it has stopped. Idempotent. */
+  void stopListening();
+
   class Access;  ///< the grabber subclass's interface
 
  private:
   VelodyneModel model_;
+  int live_port_ = -1;
+  bool listening_ = false;
   std::unique_ptr<Access> grabber_;
   std::vector<LaserCorrection> lasers_;
 };

@@ -100,8 +100,25 @@ class VelodyneCapture {
   const SensorModel& getSensorModel() const;
 
   /** \brief Reads packets up to the end of the next full sweep; false when the capture has none
-   * left. Throws InputError on a packet that does not belong to this model. */
+   * left. Throws InputError on a packet that does not belong to this model.
+   * A live capture (listen()) waits for the sweep: false once stop() was called; InputError
+   * naming the port when no data packet came for the listen() timeout. */
   bool next(VelodyneSweep& sweep);
+
+  /** \brief A live sensor: PCL's grabber (`pcl::HDLGrabber` / `pcl::VLPGrabber` built with an
+   * address and a port, the same toPointClouds override as for files) receives the data packets
+   * on UDP `port` on every address, on the grabber's own threads; next() hands out the full
+   * sweeps as they complete (the first, partial turn is dropped as for files). Throws InputError
+   * naming the port when it is in use, or the calibration as the constructor.
+   * \param timeout_seconds next() throws when no data packet came for this long */
+  static std::unique_ptr<VelodyneCapture> listen(int port, VelodyneModel model,
+                                                 const std::string& calibration = "",
+                                                 double timeout_seconds = 5.0);
+  /** \brief Live capture: stops the grabber (thread-safe, idempotent); a waiting next() returns
+   * false. No effect on a file. */
+  void stop();
+  /** \brief True for a capture made by listen(). */
+  bool isLive() const;
 
   /** \brief Elevation [deg] of each laser id from the grabber's calibration (not sorted). */
   const std::vector<double>& getLaserElevations() const;
@@ -130,6 +147,8 @@ class VelodyneCapture {
 
  private:
   struct Impl;
+  VelodyneCapture() = default;
+  bool nextLive(VelodyneSweep& sweep);
   std::unique_ptr<Impl> impl_;
 };
 
