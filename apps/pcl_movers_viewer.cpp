@@ -12,6 +12,7 @@
 #include <pcl_movers/io/ground_truth.h>
 #include <pcl_movers/io/sequence.h>
 #include <pcl_movers/io/tracks.h>
+#include <pcl_movers/io/velodyne_capture.h>
 #include <pcl_movers/mover_detector.h>
 #include <pcl_movers/viz/scene_style.h>
 
@@ -89,6 +90,9 @@ struct ViewerParameters {
   std::string config;         ///< --config FILE: detector parameters for --live
   bool movers_only = false;   ///< --movers-only: only the movers' points, boxes and trails
   bool point_labels = false;  ///< --point-labels: colour by DIR/labels/*.label (required)
+  std::string pcap;  ///< --pcap FILE: a Velodyne capture instead of SEQUENCE (implies --live)
+  std::string sensor = "auto";  ///< --sensor: the capture's Velodyne model
+  std::string calibration;      ///< --calibration XML: the capture's calibration (HDL-64E)
 };
 
 tools::OptionTable optionTable() {
@@ -108,6 +112,14 @@ tools::OptionTable optionTable() {
         "run the detector (MoverDetector) while playing instead of reading\n--detections; poses "
         "from the sequence, else estimated from the scans"},
        {"--config", "FILE", "detector parameters for --live (pcl_movers_detect --print-config)"},
+       {"--pcap", "FILE",
+        "play a Velodyne packet capture instead of SEQUENCE, detecting while\nplaying (--live); "
+        "frame i is the capture's i-th full sweep, as in\npcl_movers_detect --pcap; poses "
+        "estimated. The sweeps are decoded\nonce and held in memory (about 1 MB per HDL-32E "
+        "sweep): --frames\nA:B views part of a long capture"},
+       {"--sensor", "NAME", "--pcap: hdl32, hdl64 or vlp16; auto: from the first data packet",
+        d.sensor},
+       {"--calibration", "XML", "--pcap: VeloView/PCL calibration (db.xml; required for hdl64)"},
        {"--ground-truth", "", "also draw the ground-truth boxes of SEQUENCE/objects.txt (magenta)"},
        {"--frames", "A:B",
         "frames to show or render, 0-based inclusive (tracks.csv's `frame`);\nA:, :B, A also "
@@ -128,7 +140,8 @@ tools::OptionTable optionTable() {
 
 void printHelp(const char* program) {
   std::printf(
-      "Usage: %s SEQUENCE [options]\n\n"
+      "Usage: %s SEQUENCE [options]\n"
+      "       %s --pcap FILE [--sensor hdl32|hdl64|vlp16] [options]\n\n"
       "Plays a LiDAR sequence folder (frames/*.pcd, *.pcd, *.bin or velodyne/*.bin; poses.txt,\n"
       "times.txt, objects.txt optional) with the tracks of pcl_movers_detect, or renders PNG\n"
       "screenshots. The overlay shows `frame I/N (file NNNNNN)`: I is tracks.csv's `frame`, the\n"
@@ -145,7 +158,7 @@ void printHelp(const char* program) {
       "Colours: ground dark grey, movers red with orange boxes, arrows and trails; stationary\n"
       "tracks in cool per-track colours; other points grey by height; ground truth magenta;\n"
       "the selected track yellow.\n",
-      program, optionTable().help().c_str());
+      program, program, optionTable().help().c_str());
 }
 
 double parseNumber(const std::string& option, const std::string& text, double lo, double hi) {
@@ -161,11 +174,21 @@ double parseNumber(const std::string& option, const std::string& text, double lo
 
 ViewerParameters parseParameters(int argc, char** argv, std::string& sequence) {
   const auto args = optionTable().parse(argc, argv);
-  if (args.positional.size() != 1)
-    throw InputError("expected exactly one SEQUENCE folder, got " +
-                     std::to_string(args.positional.size()) + " (see -h)");
-  sequence = args.positional.front();
   ViewerParameters p;
+  args.get("--pcap", p.pcap);
+  args.get("--sensor", p.sensor);
+  args.get("--calibration", p.calibration);
+  if (p.pcap.empty()) {
+    if (args.positional.size() != 1)
+      throw InputError("expected exactly one SEQUENCE folder, got " +
+                       std::to_string(args.positional.size()) + " (see -h)");
+    sequence = args.positional.front();
+    if (args.has("--sensor") || !p.calibration.empty())
+      throw InputError("--sensor and --calibration are for --pcap (a sequence folder is decoded)");
+  } else if (!args.positional.empty()) {
+    throw InputError("--pcap " + p.pcap + " and SEQUENCE " + args.positional.front() +
+                     " exclude each other: give one");
+  }
   args.get("--detections", p.detections);
   args.get("--screenshot-dir", p.screenshot_dir);
   args.get("--frames", p.frames);
@@ -179,10 +202,14 @@ ViewerParameters parseParameters(int argc, char** argv, std::string& sequence) {
   if (args.get("--rate", v)) p.rate = parseNumber("--rate", v, 0.01, 1000);
   p.ground_truth = args.has("--ground-truth");
   p.overwrite = args.has("--overwrite");
-  p.live = args.has("--live");
+  p.live = args.has("--live") || !p.pcap.empty();
   p.movers_only = args.has("--movers-only");
   p.point_labels = args.has("--point-labels");
   args.get("--config", p.config);
+  if (!p.pcap.empty() && (!p.detections.empty() || p.ground_truth))
+    throw InputError(
+        "--pcap detects while playing: --detections and --ground-truth need a "
+        "SEQUENCE folder");
   if (p.point_labels && p.detections.empty())
     throw InputError("--point-labels needs --detections DIR (it reads DIR/labels/)");
   if (p.live && !p.detections.empty())
@@ -191,7 +218,7 @@ ViewerParameters parseParameters(int argc, char** argv, std::string& sequence) {
   if (!p.config.empty() && !p.live) throw InputError("--config only applies to --live");
   if (p.format != "png" && p.format != "ppm")
     throw InputError("--format " + p.format + ": use png or ppm");
-  if (!p.screenshot_dir.empty() && p.screenshot_dir == sequence)
+  if (!p.screenshot_dir.empty() && !sequence.empty() && p.screenshot_dir == sequence)
     throw InputError("--screenshot-dir must not be the SEQUENCE folder");
   return p;
 }
@@ -344,9 +371,69 @@ void applyPointLabels(const std::string& path, std::size_t points, viz::PointLab
   }
 }
 
+/** The frames the viewer shows: a sequence folder, or the full sweeps of a Velodyne capture
+ * (--pcap) decoded once, in order, and held in memory: the viewer steps back and forth, and a
+ * capture can only be read forward. A capture's frame i is its i-th full sweep, as for
+ * pcl_movers_detect --pcap; its time is the sweep's first firing after the first sweep's. */
+class FrameSource {
+ public:
+  void openFolder(const std::string& folder, double rate_hz) { reader_.open(folder, rate_hz); }
+  /** Decodes the sweeps 0..`last` (all when `last` is SIZE_MAX), with a progress line. */
+  void openCapture(const std::string& pcap, io::VelodyneModel model, const std::string& calibration,
+                   std::size_t last) {
+    pcap_ = pcap;
+    io::VelodyneCapture capture(pcap, model, calibration);
+    io::VelodyneSweep sweep;
+    while (sweeps_.size() <= last && capture.next(sweep)) {
+      if (sweeps_.empty()) start_ = sweep.start_time;
+      times_.push_back(sweep.start_time - start_);
+      sweeps_.push_back(sweep.cloud);
+      if (sweeps_.size() % 100 == 0)
+        print_info("[%s] %zu sweeps decoded from %s\n", kTool, sweeps_.size(), pcap.c_str());
+    }
+    print_info("[%s] %s: %zu full %s sweeps\n", kTool, pcap.c_str(), sweeps_.size(),
+               io::velodyneModelName(model).c_str());
+  }
+  bool isCapture() const { return !pcap_.empty(); }
+  std::size_t size() const { return isCapture() ? sweeps_.size() : reader_.size(); }
+  bool empty() const { return size() == 0; }
+  void read(std::size_t i, pcl::PointCloud<pcl::PointXYZI>& cloud) const {
+    if (isCapture())
+      cloud = *sweeps_.at(i);
+    else
+      reader_.read(i, cloud);
+  }
+  double time(std::size_t i) const { return isCapture() ? times_.at(i) : reader_.time(i); }
+  bool hasPoses() const { return !isCapture() && reader_.hasPoses(); }
+  Eigen::Isometry3d pose(std::size_t i) const { return reader_.pose(i); }
+  /** Screenshot and label file stem: the file's, or the sweep index in six digits. */
+  std::string frameName(std::size_t i) const {
+    if (!isCapture()) return reader_.frameName(i);
+    char name[32];
+    std::snprintf(name, sizeof(name), "%06zu", i);
+    return name;
+  }
+  long long frameNumber(std::size_t i) const {
+    return isCapture() ? static_cast<long long>(i) : reader_.frameNumber(i);
+  }
+  /** Frame i named for messages. */
+  std::string framePath(std::size_t i) const {
+    return isCapture() ? pcap_ + " sweep " + std::to_string(i) : reader_.framePaths().at(i);
+  }
+  /** The sequence folder (empty for a capture). */
+  const io::SequenceReader& folder() const { return reader_; }
+
+ private:
+  io::SequenceReader reader_;
+  std::string pcap_;
+  std::vector<pcl::PointCloud<pcl::PointXYZI>::ConstPtr> sweeps_;
+  std::vector<double> times_;
+  double start_ = 0.0;
+};
+
 /** Everything the viewer shows, loaded and validated before any window opens. */
 struct SceneData {
-  io::SequenceReader reader;
+  FrameSource source;
   viz::TrackIndex tracks;
   bool has_tracks = false;
   std::string labelled_dir;
@@ -355,15 +442,30 @@ struct SceneData {
   bool has_ground_truth = false;
 };
 
+/** --pcap: the capture's sweeps up to the last one --frames asks for. */
+void loadCapture(const ViewerParameters& p, SceneData& scene) {
+  std::error_code ec;
+  if (!fs::is_regular_file(p.pcap, ec))
+    throw InputError(p.pcap, 0,
+                     fs::exists(p.pcap, ec) ? "--pcap: not a file" : "--pcap: does not exist");
+  const auto model =
+      p.sensor == "auto" ? io::detectVelodyneModel(p.pcap) : io::velodyneModelFromName(p.sensor);
+  const std::size_t last =
+      p.frames.empty() ? SIZE_MAX : viz::parseFrameRange(p.frames, SIZE_MAX).last;
+  scene.source.openCapture(p.pcap, model, p.calibration, last);
+  if (scene.source.empty()) throw InputError(p.pcap, 0, "no full sweep in the capture");
+}
+
 void loadScene(const std::string& sequence, const ViewerParameters& p, SceneData& scene) {
+  if (!p.pcap.empty()) return loadCapture(p, scene);
   std::error_code ec;
   if (!fs::exists(sequence, ec)) throw InputError(sequence, 0, "no such sequence folder");
   if (!fs::is_directory(sequence, ec)) throw InputError(sequence, 0, "not a folder");
-  scene.reader.open(sequence, p.rate);
-  if (scene.reader.empty())
+  scene.source.openFolder(sequence, p.rate);
+  if (scene.source.empty())
     throw InputError(sequence, 0,
                      "no frames (expected frames/*.pcd, *.pcd or velodyne/*.bin in the folder)");
-  const std::size_t n = scene.reader.size();
+  const std::size_t n = scene.source.size();
   if (!p.detections.empty()) {
     if (!fs::is_directory(p.detections, ec))
       throw InputError(p.detections, 0, "--detections: no such folder");
@@ -380,7 +482,7 @@ void loadScene(const std::string& sequence, const ViewerParameters& p, SceneData
     scene.has_tracks = true;
     const fs::path labelled = fs::path(p.detections) / "labelled";
     if (fs::is_directory(labelled, ec)) {
-      checkLabelledBelongs(labelled, fs::path(p.detections), scene.reader);
+      checkLabelledBelongs(labelled, fs::path(p.detections), scene.source.folder());
       scene.labelled_dir = labelled.string();
     }
     const fs::path labels = fs::path(p.detections) / "labels";
@@ -393,7 +495,7 @@ void loadScene(const std::string& sequence, const ViewerParameters& p, SceneData
     if (p.point_labels) scene.labelled_dir.clear();
   }
   if (p.ground_truth) {
-    const std::string path = scene.reader.objectsPath();
+    const std::string path = scene.source.folder().objectsPath();
     if (path.empty())
       throw InputError(sequence, 0, "--ground-truth: the sequence has no objects.txt");
     for (auto& o : io::readObjects(path)) {
@@ -427,16 +529,16 @@ class LiveDetector {
   void ensure(std::size_t i) {
     while (next_ <= i) {
       pcl::PointCloud<pcl::PointXYZI>::Ptr scan(new pcl::PointCloud<pcl::PointXYZI>);
-      scene_.reader.read(next_, *scan);
+      scene_.source.read(next_, *scan);
       const Eigen::Isometry3d pose =
-          scene_.reader.hasPoses() ? scene_.reader.pose(next_) : ego_.estimate(*scan);
+          scene_.source.hasPoses() ? scene_.source.pose(next_) : ego_.estimate(*scan);
       scan->sensor_origin_.setZero();
       scan->sensor_orientation_.setIdentity();
       auto result = std::make_shared<Detector::FrameResult>();
       try {
-        detector_.process(scan, pose, scene_.reader.time(next_), static_cast<int>(next_), *result);
+        detector_.process(scan, pose, scene_.source.time(next_), static_cast<int>(next_), *result);
       } catch (const InputError& e) {
-        throw InputError(scene_.reader.framePaths()[next_] + ": " + e.what());
+        throw InputError(scene_.source.framePath(next_) + ": " + e.what());
       }
       rows_.insert(rows_.end(), result->rows.begin(), result->rows.end());
       cache_.emplace_back(next_, result);
@@ -560,11 +662,11 @@ class FrameRenderer {
     } else if (!labelled.empty()) {
       readLabelledCloud(labelled, cloud, labels);
     } else {
-      scene_.reader.read(i, cloud);
+      scene_.source.read(i, cloud);
       const auto ground = viz::estimateGroundMask(cloud);
       labels = viz::labelPointsFromTracks(cloud, ground, rows);
       const fs::path label_file =
-          fs::path(scene_.labels_dir) / (scene_.reader.frameName(i) + ".label");
+          fs::path(scene_.labels_dir) / (scene_.source.frameName(i) + ".label");
       std::error_code ec;
       if (!scene_.labels_dir.empty() && fs::exists(label_file, ec))
         applyPointLabels(label_file.string(), cloud.size(), labels);
@@ -597,7 +699,7 @@ class FrameRenderer {
 
     // Pose of this frame: the sequence's, else fitted to the rows' sensor/world pairs.
     std::optional<Eigen::Isometry3d> pose;
-    if (scene_.reader.hasPoses()) pose = scene_.reader.pose(i);
+    if (scene_.source.hasPoses()) pose = scene_.source.pose(i);
     if (!pose) pose = viz::fitSensorPose(rows);
     const Eigen::Isometry3d sensor_to_world = pose ? *pose : Eigen::Isometry3d::Identity();
     const Eigen::Isometry3d world_to_sensor = sensor_to_world.inverse();
@@ -642,9 +744,9 @@ class FrameRenderer {
     if (selected_ >= 0 && !selected)
       extra += (extra.empty() ? "" : "   ") + std::string("track ") + std::to_string(selected_) +
                " not in this frame";
-    const double t = scene_.reader.time(i);
-    const std::string text = viz::overlayText(i, scene_.reader.size(), t, mover_count, selected,
-                                              extra, scene_.reader.frameNumber(i)) +
+    const double t = scene_.source.time(i);
+    const std::string text = viz::overlayText(i, scene_.source.size(), t, mover_count, selected,
+                                              extra, scene_.source.frameNumber(i)) +
                              (scene_.has_tracks || live_ ? "" : "\n(no --detections: points only)");
     // VTK anchors multi-line text at its bottom-left corner: place it so the first line sits at
     // the top of the window whatever the number of lines.
@@ -707,7 +809,7 @@ class FrameRenderer {
  private:
   std::string labelledPath(std::size_t i) const {
     if (scene_.labelled_dir.empty()) return "";
-    const fs::path p = fs::path(scene_.labelled_dir) / (scene_.reader.frameName(i) + ".pcd");
+    const fs::path p = fs::path(scene_.labelled_dir) / (scene_.source.frameName(i) + ".pcd");
     std::error_code ec;
     return fs::is_regular_file(p, ec) ? p.string() : "";
   }
@@ -811,7 +913,7 @@ int renderScreenshots(const SceneData& scene, const ViewerParameters& p, viz::Fr
       renderer.show(i);
       renderer.applyCamera(camera);
       const std::string path =
-          (fs::path(p.screenshot_dir) / (scene.reader.frameName(i) + "." + p.format)).string();
+          (fs::path(p.screenshot_dir) / (scene.source.frameName(i) + "." + p.format)).string();
       renderer.writeImage(path, p.format);
       written.push_back(path);
       bar.update(i - range.first + 1);
@@ -828,7 +930,7 @@ int renderScreenshots(const SceneData& scene, const ViewerParameters& p, viz::Fr
 }
 
 std::string freeScreenshotName(std::size_t frame, const SceneData& scene) {
-  const std::string base = "viewer_" + scene.reader.frameName(frame);
+  const std::string base = "viewer_" + scene.source.frameName(frame);
   std::error_code ec;
   for (int k = 0; k < 10000; ++k) {
     const std::string name = base + (k ? "_" + std::to_string(k) : "") + ".png";
@@ -897,8 +999,8 @@ int runInteractive(const SceneData& scene, const ViewerParameters& p, viz::Frame
     renderer.viewer().spinOnce(15, true);
     if (playing) {
       const double dt =
-          frame + 1 < scene.reader.size()
-              ? std::max(1e-3, scene.reader.time(frame + 1) - scene.reader.time(frame))
+          frame + 1 < scene.source.size()
+              ? std::max(1e-3, scene.source.time(frame + 1) - scene.source.time(frame))
               : 1.0 / p.rate;
       const auto now = std::chrono::steady_clock::now();
       if (std::chrono::duration<double>(now - last_step).count() >= dt / speed) {
@@ -923,13 +1025,13 @@ int run(int argc, char** argv) {
   SceneData scene;
   loadScene(sequence, p, scene);
   const viz::FrameRange range = p.frames.empty()
-                                    ? viz::FrameRange{0, scene.reader.size() - 1}
-                                    : viz::parseFrameRange(p.frames, scene.reader.size());
+                                    ? viz::FrameRange{0, scene.source.size() - 1}
+                                    : viz::parseFrameRange(p.frames, scene.source.size());
   // Everything that can be checked without a display is checked first, so a bad input is reported
   // as such on any machine: the first frame must be readable, the output folder usable.
   {
     pcl::PointCloud<pcl::PointXYZI> probe;
-    scene.reader.read(range.first, probe);
+    scene.source.read(range.first, probe);
   }
   if (!p.screenshot_dir.empty()) {
     std::error_code ec;

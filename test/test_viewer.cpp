@@ -15,6 +15,7 @@
 
 #include <gtest/gtest.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdlib>
@@ -497,8 +498,9 @@ TEST_F(ViewerTool, HelpListsKeysAndDefaults) {
   TempDir tmp("help");
   const auto r = runTool("-h", tmp.path / "log");
   EXPECT_EQ(r.code, 0);
-  for (const char* s : {"--screenshot-dir", "--detections", "--movers-only", "--point-labels",
-                        "space", "tab", "1 / 2 / 3", "(default: chase)", "(default: 1280x720)"})
+  for (const char* s :
+       {"--screenshot-dir", "--detections", "--movers-only", "--point-labels", "--pcap", "space",
+        "tab", "1 / 2 / 3", "(default: chase)", "(default: 1280x720)"})
     EXPECT_NE(r.output.find(s), std::string::npos) << s << "\n" << r.output;
 }
 
@@ -601,6 +603,51 @@ TEST_F(ViewerTool, RendersTheMoverInRedWhereItProjects) {
   Image im;
   ASSERT_TRUE(readPpm(plain / "000001.ppm", im));
   EXPECT_EQ(countRed(im), 0);
+}
+
+// --pcap: the viewer decodes a capture's sweeps and detects while playing. The simulated scene's
+// capture (data/scenarios/sample.yaml as HDL-32E packets) gives one image per sweep; its mover
+// turns red once the tracker confirms it, never on the first sweep (no track is a mover there).
+TEST_F(ViewerTool, PlaysACaptureDetectingItsMovers) {
+  if (!hasDisplay()) GTEST_SKIP() << "no X display (DISPLAY unset): run the tests under xvfb-run";
+  const std::string simulate = std::string(PCL_MOVERS_BINARY_DIR) + "/apps/pcl_movers_simulate";
+  if (access(simulate.c_str(), X_OK) != 0) GTEST_SKIP() << "pcl_movers_simulate not built";
+  TempDir tmp("pcap");
+  const fs::path pcap = tmp.path / "scene.pcap";
+  const std::string sim = "\"" + simulate +
+                          "\" \"" PCL_MOVERS_SOURCE_DIR "/data/scenarios/sample.yaml\" \"" +
+                          (tmp.path / "scene").string() + "\" --sensor hdl32 --pcap \"" +
+                          pcap.string() + "\" > \"" + (tmp.path / "sim.log").string() + "\" 2>&1";
+  ASSERT_EQ(std::system(sim.c_str()), 0);
+  const fs::path shots = tmp.path / "shots";
+  const auto r = runTool("--pcap \"" + pcap.string() +
+                             "\" --sensor hdl32 --frames 0:30 --size 320x240 --format ppm "
+                             "--camera bird --screenshot-dir \"" +
+                             shots.string() + "\"",
+                         tmp.path / "log");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("full hdl32 sweeps"), std::string::npos) << r.output;
+  std::size_t images = 0;
+  for (const auto& e : fs::directory_iterator(shots)) images += e.path().extension() == ".ppm";
+  EXPECT_EQ(images, 31u);
+  Image first, last;
+  ASSERT_TRUE(readPpm(shots / "000000.ppm", first));
+  ASSERT_TRUE(readPpm(shots / "000030.ppm", last));
+  EXPECT_EQ(countRed(first), 0);
+  EXPECT_GT(countRed(last), 10) << "no mover detected in the capture's sweep 30";
+  // A capture and a folder together, a missing capture, --detections with a capture.
+  const std::string out = " --screenshot-dir \"" + (tmp.path / "bad").string() + "\"";
+  for (const auto& c : std::vector<std::pair<std::string, std::string>>{
+           {"--pcap \"" + pcap.string() + "\" \"" + (tmp.path / "scene").string() + "\"",
+            "exclude each other"},
+           {"--pcap \"" + (tmp.path / "none.pcap").string() + "\"", "none.pcap"},
+           {"--pcap \"" + pcap.string() + "\" --detections \"" + tmp.path.string() + "\"",
+            "--detections"},
+           {"--pcap \"" + pcap.string() + "\" --sensor os1_64", "os1_64"}}) {
+    const auto b = runTool(c.first + out, tmp.path / "log");
+    EXPECT_NE(b.code, 0) << c.first;
+    EXPECT_NE(b.output.find(c.second), std::string::npos) << c.first << "\n" << b.output;
+  }
 }
 
 // --movers-only draws the mover (its points, box, arrow, trail) and nothing else: the ground and
