@@ -643,7 +643,7 @@ std::string moverJson(const pcl_movers::io::TrackRow& r) {
      << ", \"velocity\": " << jsonNumbers({r.vx, r.vy}, "%.3f")
      << ", \"speed\": " << jsonNumber(r.speed, "%.3f")
      << ", \"similarity\": " << jsonNumber(r.similarity, "%.3f") << ", \"points\": " << r.points
-     << "}";
+     << ", \"reason\": \"" << r.reason << "\"}";
   return js.str();
 }
 
@@ -661,6 +661,15 @@ std::string frameJson(std::size_t i, long long file, double time, bool blind,
   for (const auto& r : rows) {
     if (!r.mover) continue;
     js << (first ? "" : ", ") << moverJson(r);
+    first = false;
+  }
+  // Why every other track is not a mover (the first decision test it failed).
+  js << "], \"not_movers\": [";
+  first = true;
+  for (const auto& r : rows) {
+    if (r.mover) continue;
+    js << (first ? "" : ", ") << "{\"track_id\": " << r.track_id << ", \"reason\": \"" << r.reason
+       << "\"}";
     first = false;
   }
   js << "]}";

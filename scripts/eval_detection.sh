@@ -51,6 +51,9 @@ run() {
       --no-dont-care --json "$work/$set.$mode.counted.json" >/dev/null 2>"$work/$set.$mode.err" ||
       { echo "error: pcl_movers_eval --no-dont-care failed on $set ($mode):" >&2; cat "$work/$set.$mode.err" >&2; exit 1; }
   fi
+  # Rows per decision reason (tracks.csv `mover`, `reason`): why objects are, or are not, movers.
+  awk -F, 'NR > 1 { n[$5 "," $21]++ } END { for (k in n) print k "," n[k] }' "$out/tracks.csv" |
+    sort >"$work/$set.$mode.reasons"
   rm -rf "$out"
 }
 
@@ -279,4 +282,16 @@ for mode in ("registration", "centroid"):
     if len(order) > 10:
         print(f"\n({len(order) - 10} more tracks flagged in fewer frames.)")
 PY
+fi
+
+if [ -f "$work/kitti.registration.reasons" ]; then
+  echo
+  echo "### Why rows are, or are not, movers: KITTI 0000-a (registration, poses.txt)"
+  echo
+  echo "Rows of tracks.csv by their \`reason\`, the mover decision's test that settled them"
+  echo "(design.md, \"The mover decision\"; the first test a track fails, or the path that made it a mover)."
+  echo
+  echo "| mover | reason | rows |"
+  echo "|---:|---|---:|"
+  sort -t, -k1,1r -k3,3nr "$work/kitti.registration.reasons" | awk -F, '{ printf "| %s | %s | %s |\n", $1, $2, $3 }'
 fi

@@ -353,6 +353,28 @@ TEST(TracksIO, FileColumnBesideTheFrameIndex) {
   EXPECT_EQ(old[0].points, 9);
 }
 
+// The `reason` column (#28): written last, read back; files without it read with reason "".
+TEST(TracksIO, ReasonColumnRoundTrips) {
+  TempDir dir;
+  io::TrackRow a, b;
+  a.frame = 1, a.track_id = 4, a.mover = true, a.reason = "sustained";
+  b.frame = 1, b.track_id = 5, b.reason = "";  // a row built without a decision
+  const auto path = (dir.path() / "tracks.csv").string();
+  io::writeTracks(path, {a, b});
+  const auto rows = io::readTracks(path);
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[0].reason, "sustained");
+  EXPECT_TRUE(rows[0].mover);
+  EXPECT_EQ(rows[1].reason, "");
+  writeFile(dir.path() / "v2.csv",
+            "frame,file,time,track_id,mover,x,y,z,wx,wy,wz,vx,vy,speed,length,width,height,yaw,"
+            "similarity,points\n5,45,0.5,7,1,0,0,0,0,0,0,0,0,0,0,0,0,0,0,9\n");
+  const auto v2 = io::readTracks((dir.path() / "v2.csv").string());
+  ASSERT_EQ(v2.size(), 1u);
+  EXPECT_EQ(v2[0].file, 45);
+  EXPECT_EQ(v2[0].reason, "");
+}
+
 TEST(SharedData, ReadsEverySet) {
   const fs::path data(PCL_MOVERS_SHARED_DATA);
   if (!fs::exists(data / "kitti-tracking-0000-a"))

@@ -295,6 +295,39 @@ TEST(MoverTracker, HeightTestUsesTallestView) {
   }
 }
 
+// Every result says which decision test settled it: a crossing car passes them all and latches, a
+// parked car fails the motion test, a low moving box the height test; at birth all are "new";
+// the mover flag and the reason never disagree.
+TEST(MoverTracker, EveryDecisionGivesItsReason) {
+  using pcl_movers::MoverReason;
+  auto is_mover_reason = [](MoverReason r) {
+    return r == MoverReason::kFast || r == MoverReason::kWellMeasured ||
+           r == MoverReason::kSustained || r == MoverReason::kLatched;
+  };
+  Tracker tracker;
+  tracker.setParameters(defaults());
+  std::vector<Tracker::ClusterResult> results;
+  for (int k = 0; k < 30; ++k) {
+    const double t = k * 0.1;
+    const Eigen::Vector3d sensor(0, -12, 1.7);
+    SceneBuilder scene;
+    scene.addBox(sensor, Eigen::Vector2d(-10 + 7.0 * t, 0), 0, 5.0, 2.0, 1.6);  // crossing car
+    scene.addBox(sensor, Eigen::Vector2d(6, 8), 0, 4.5, 1.8, 1.5);              // parked car
+    scene.addBox(sensor, Eigen::Vector2d(12 - 5.0 * t, 6), 0, 2.0, 1.0, 0.6);   // low, moving
+    results = step(tracker, scene, sensor, t);
+    ASSERT_EQ(results.size(), 3u);
+    for (const auto& r : results) {
+      ASSERT_GE(r.track_id, 0);
+      EXPECT_EQ(r.mover, is_mover_reason(r.reason)) << k << ": " << moverReasonName(r.reason);
+      if (k == 0) EXPECT_EQ(r.reason, MoverReason::kNew);
+    }
+  }
+  EXPECT_EQ(results[0].reason, MoverReason::kLatched) << moverReasonName(results[0].reason);
+  EXPECT_EQ(results[1].reason, MoverReason::kNoMotion) << moverReasonName(results[1].reason);
+  EXPECT_EQ(results[2].reason, MoverReason::kLow) << moverReasonName(results[2].reason);
+  EXPECT_STREQ(moverReasonName(MoverReason::kNoFreeSpace), "no_free_space");
+}
+
 // Registration scheduling (registration_stop_similarity): two people 2.5 m apart are both inside
 // each other's wide gate while their tracks are young. Nearest first, each track stops after its
 // own person matched, so half the registrations of "register every gated pair" are run; the

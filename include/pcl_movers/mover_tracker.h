@@ -21,6 +21,30 @@
 
 namespace pcl_movers {
 
+/** \brief The test of the mover decision that settled a track's last update, in the order
+ * MoverTracker tests them: why an object is, or is not, a mover (tracks.csv `reason`). */
+enum class MoverReason : std::uint8_t {
+  kNew,           ///< seen once: no motion measured yet
+  kLarge,         ///< larger than any mover: static structure, tracked by its centroid
+  kYoung,         ///< fewer than mover_min_age updates and its motion not yet beyond doubt
+  kLow,           ///< lower than min_mover_height in every view
+  kNoMotion,      ///< neither fast motion (speed votes) nor sustained slow motion
+  kNoFreeSpace,   ///< moves, but too few of its views fall in space earlier scans saw empty
+  kFast,          ///< mover: speed votes and free-space evidence
+  kWellMeasured,  ///< mover while young: its displacement beyond doubt and seen through
+  kSustained,     ///< mover: sustained slow motion (slow_window) and free-space evidence
+  kLatched        ///< mover: confirmed by mover_window decisions in a row (mover_latch)
+};
+
+/** \brief The name of a reason as tracks.csv writes it: new, large, young, low, no_motion,
+ * no_free_space, fast, well_measured, sustained, latched. */
+inline const char* moverReasonName(MoverReason reason) {
+  static const char* const names[] = {"new",       "large",         "young", "low",
+                                      "no_motion", "no_free_space", "fast",  "well_measured",
+                                      "sustained", "latched"};
+  return names[static_cast<int>(reason)];
+}
+
 /** \brief Tracks every object cluster of a LiDAR sequence and decides which are movers
  * (Morris et al., section 6).
  *
@@ -138,10 +162,11 @@ class MoverTracker {
     /// (x, y, time) of the first run of kUnoccludedFitPositions consecutive registered
     /// unoccluded positions (shorter while it is being collected).
     std::deque<Eigen::Vector3d> unoccluded_positions;
-    int age = 0;               ///< frames since birth
-    int missed = 0;            ///< consecutive frames without update
-    bool mover = false;        ///< mover decision after the last update
-    bool large = false;        ///< static structure tracked by centroid
+    int age = 0;                             ///< frames since birth
+    int missed = 0;                          ///< consecutive frames without update
+    bool mover = false;                      ///< mover decision after the last update
+    MoverReason reason = MoverReason::kNew;  ///< the test that settled `mover`
+    bool large = false;                      ///< static structure tracked by centroid
     double similarity = 0;     ///< B of the last update (0 in centroid mode / at birth)
     ClusterFeatures features;  ///< geometry of the last cluster assigned
     /// Cluster centroid minus measured reference point at the last update (x, y): the reference
@@ -204,6 +229,7 @@ class MoverTracker {
   struct ClusterResult {
     int track_id = -1;  ///< -1: not tracked (too small, or the track cap was reached)
     bool mover = false;
+    MoverReason reason = MoverReason::kNew;  ///< why it is, or is not, a mover
     double similarity = 0;
     Eigen::Vector2d velocity = Eigen::Vector2d::Zero();  ///< world [m/s]
     ClusterFeatures features;

@@ -13,15 +13,19 @@ namespace pcl_movers {
 namespace io {
 
 namespace {
-/** The header before the `file` column (read, so older tracks.csv files stay readable). */
+/** The headers before the `file` and the `reason` columns (read, so older tracks.csv files stay
+ * readable). */
 const char* kHeaderWithoutFile =
     "frame,time,track_id,mover,x,y,z,wx,wy,wz,vx,vy,speed,length,width,height,yaw,similarity,"
     "points";
+const char* kHeaderWithoutReason =
+    "frame,file,time,track_id,mover,x,y,z,wx,wy,wz,vx,vy,speed,length,width,height,yaw,"
+    "similarity,points";
 }  // namespace
 
 const char* tracksCsvHeader() {
   return "frame,file,time,track_id,mover,x,y,z,wx,wy,wz,vx,vy,speed,length,width,height,yaw,"
-         "similarity,points";
+         "similarity,points,reason";
 }
 
 std::string formatTrackRow(const TrackRow& r) {
@@ -29,10 +33,10 @@ std::string formatTrackRow(const TrackRow& r) {
   std::snprintf(
       buf, sizeof(buf),
       "%d,%lld,%.3f,%d,%d,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.2f,%.2f,%.2f,%.4f,"
-      "%.3f,%d",
+      "%.3f,%d,%s",
       r.frame, r.file >= 0 ? r.file : static_cast<long long>(r.frame), r.time, r.track_id,
       r.mover ? 1 : 0, r.x, r.y, r.z, r.wx, r.wy, r.wz, r.vx, r.vy, r.speed, r.length, r.width,
-      r.height, r.yaw, r.similarity, r.points);
+      r.height, r.yaw, r.similarity, r.points, r.reason.c_str());
   return buf;
 }
 
@@ -51,10 +55,11 @@ std::vector<TrackRow> readTracks(const std::string& path) {
   std::size_t line_no = 1;
   if (!std::getline(in, line)) throw InputError(path, 1, "empty file (expected a header row)");
   if (!line.empty() && line.back() == '\r') line.pop_back();
-  const bool with_file = line == tracksCsvHeader();
+  const bool with_reason = line == tracksCsvHeader();
+  const bool with_file = with_reason || line == kHeaderWithoutReason;
   if (!with_file && line != kHeaderWithoutFile)
     throw InputError(path, 1, std::string("unexpected header, expected: ") + tracksCsvHeader());
-  const std::size_t columns = with_file ? 20 : 19;
+  const std::size_t columns = with_reason ? 21 : with_file ? 20 : 19;
   std::vector<TrackRow> rows;
   while (std::getline(in, line)) {
     ++line_no;
@@ -63,6 +68,7 @@ std::vector<TrackRow> readTracks(const std::string& path) {
     std::stringstream ss(line);
     std::string cell;
     while (std::getline(ss, cell, ',')) cells.push_back(cell);
+    if (line.back() == ',') cells.emplace_back();  // an empty last cell (reason "")
     if (cells.size() != columns)
       throw InputError(path, line_no,
                        "expected " + std::to_string(columns) + " columns, found " +
@@ -101,6 +107,7 @@ std::vector<TrackRow> readTracks(const std::string& path) {
       r.yaw = num();
       r.similarity = num();
       r.points = static_cast<int>(num());
+      if (with_reason) r.reason = cells[k].substr(0, cells[k].find_last_not_of(" \r") + 1);
     } catch (const std::exception& e) {
       throw InputError(path, line_no, std::string("bad value '") + e.what() + "'");
     }

@@ -319,6 +319,7 @@ void MoverDetector<PointT>::process(const PointCloudConstPtr& scan,
     row.time = time;
     row.track_id = cr.track_id;
     row.mover = cr.mover;
+    row.reason = moverReasonName(cr.reason);
     const Eigen::Vector3d local = world_to_sensor * cr.features.centroid;
     row.x = local.x();
     row.y = local.y();

@@ -768,9 +768,11 @@ void MoverTracker<PointT>::decideMover(Track& track,
   const auto& p = parameters_;
   const int run = track.mover_run;
   track.mover = false;
+  track.reason = MoverReason::kLarge;
   if (track.large) return;
   if (track.confirmed && p.mover_latch) {
     track.mover = true;
+    track.reason = MoverReason::kLatched;
     return;
   }
   track.mover_run = 0;  // restored below when this update passes every test
@@ -803,6 +805,7 @@ void MoverTracker<PointT>::decideMover(Track& track,
   const bool well_measured = track.hits <= p.mover_window + 1 &&
                              (free_now || !free_space_map_ || p.free_space_lag <= 0) &&
                              wellMeasuredMotion(track);
+  track.reason = MoverReason::kYoung;
   if (!well_measured && track.hits < p.mover_min_age) return;
   // The tallest view counts: a cluster's height changes with the view (a van seen from straight
   // behind showed 0.7-0.9 m and its decision flickered around min_mover_height).
@@ -811,17 +814,24 @@ void MoverTracker<PointT>::decideMover(Track& track,
   // its nearer lower body (urban cars, the KITTI van: such fragments became movers with the
   // velocity of their sliding centroid).
   const bool seen_standing_only = track.max_height < p.min_mover_height;
+  track.reason = MoverReason::kLow;
   if (seen_standing_only && (track.max_standing_height < p.min_mover_height || besideMover(track)))
     return;
-  if (!fastMotion(track, seen_standing_only, well_measured) && !slow_now) return;
+  const bool fast = fastMotion(track, seen_standing_only, well_measured);
+  track.reason = MoverReason::kNoMotion;
+  if (!fast && !slow_now) return;
   // One test can be fooled (a cluster that briefly included something else, a mixed edge);
   // free_space_votes tests with evidence are needed, within the last mover_window tests.
   int free_votes = 0;
   for (const char f : track.free_votes) free_votes += f;
   const int free_needed =
       well_measured ? std::min(p.confirm_free_space_votes, p.free_space_votes) : p.free_space_votes;
+  track.reason = MoverReason::kNoFreeSpace;
   if (free_space_map_ && p.free_space_lag > 0 && free_votes < free_needed) return;
   track.mover = true;
+  track.reason = !fast                                           ? MoverReason::kSustained
+                 : well_measured && track.hits < p.mover_min_age ? MoverReason::kWellMeasured
+                                                                 : MoverReason::kFast;
   // Latch only after a steady run of positive decisions: a brief false confirmation (a cluster
   // that jumped to another object) must not become a mover for the rest of the track's life.
   track.mover_run = run + 1;
@@ -1072,6 +1082,7 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
       ++t.since_registration;
       r.track_id = t.id;
       r.mover = t.mover;
+      r.reason = t.reason;
       r.similarity = t.similarity;
       r.velocity = t.reportedVelocity();
       continue;
@@ -1264,6 +1275,7 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     }
     r.track_id = t.id;
     r.mover = t.mover;
+    r.reason = t.reason;
     r.similarity = t.similarity;
     r.velocity = t.reportedVelocity();
   }
@@ -1286,6 +1298,7 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
       auto& r = results_[c];
       r.track_id = t.id;
       r.mover = t.mover;
+      r.reason = t.reason;
       r.similarity = 0;
       r.velocity = t.reportedVelocity();
     }

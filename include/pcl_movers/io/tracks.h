@@ -27,6 +27,9 @@ struct TrackRow {
   double similarity = 0;
   int points = 0;
   long long file = -1;  ///< the input file's number; -1: unknown, written as `frame`
+  /// Why it is, or is not, a mover: the decision test that settled it (moverReasonName(); "new"
+  /// for a track seen once); "" when read from a tracks.csv without the column.
+  std::string reason;
 };
 
 /** \brief The exact header line of tracks.csv. */
