@@ -46,6 +46,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -53,12 +54,15 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <set>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace fs = std::filesystem;
@@ -91,8 +95,11 @@ struct ViewerParameters {
   bool movers_only = false;   ///< --movers-only: only the movers' points, boxes and trails
   bool point_labels = false;  ///< --point-labels: colour by DIR/labels/*.label (required)
   std::string pcap;  ///< --pcap FILE: a Velodyne capture instead of SEQUENCE (implies --live)
-  std::string sensor = "auto";  ///< --sensor: the capture's Velodyne model
-  std::string calibration;      ///< --calibration XML: the capture's calibration (HDL-64E)
+  std::string sensor_name = "auto";  ///< --sensor: the capture's or sensor's Velodyne model
+  std::string calibration;           ///< --calibration XML: the capture's calibration (HDL-64E)
+  bool live_sensor = false;          ///< --live without SEQUENCE: a sensor's packets on UDP --port
+  int port = 2368;                   ///< --port: the sensor's UDP data port (Velodyne's default)
+  double timeout = 5.0;  ///< --timeout: error when no data packet comes for this long [s]
 };
 
 tools::OptionTable optionTable() {
@@ -110,7 +117,11 @@ tools::OptionTable optionTable() {
        {"--movers-only", "", "draw only the movers: their points, boxes, arrows and trails"},
        {"--live", "",
         "run the detector (MoverDetector) while playing instead of reading\n--detections; poses "
-        "from the sequence, else estimated from the scans"},
+        "from the sequence, else estimated from the scans.\nWithout SEQUENCE: a live Velodyne "
+        "sensor (--sensor, --port), the\nnewest sweep shown while playing"},
+       {"--port", "N", "--live sensor: UDP data port", std::to_string(d.port)},
+       {"--timeout", "S", "--live sensor: error when no data packet comes for S seconds",
+        tools::str(d.timeout)},
        {"--config", "FILE", "detector parameters for --live (pcl_movers_detect --print-config)"},
        {"--pcap", "FILE",
         "play a Velodyne packet capture instead of SEQUENCE, detecting while\nplaying (--live); "
@@ -118,7 +129,7 @@ tools::OptionTable optionTable() {
         "estimated. The sweeps are decoded\nonce and held in memory (about 1 MB per HDL-32E "
         "sweep): --frames\nA:B views part of a long capture"},
        {"--sensor", "NAME", "--pcap: hdl32, hdl64 or vlp16; auto: from the first data packet",
-        d.sensor},
+        d.sensor_name},
        {"--calibration", "XML", "--pcap: VeloView/PCL calibration (db.xml; required for hdl64)"},
        {"--ground-truth", "", "also draw the ground-truth boxes of SEQUENCE/objects.txt (magenta)"},
        {"--frames", "A:B",
@@ -141,7 +152,8 @@ tools::OptionTable optionTable() {
 void printHelp(const char* program) {
   std::printf(
       "Usage: %s SEQUENCE [options]\n"
-      "       %s --pcap FILE [--sensor hdl32|hdl64|vlp16] [options]\n\n"
+      "       %s --pcap FILE [--sensor hdl32|hdl64|vlp16] [options]\n"
+      "       %s --live --sensor hdl32|hdl64|vlp16 [--port 2368] [options]\n\n"
       "Plays a LiDAR sequence folder (frames/*.pcd, *.pcd, *.bin or velodyne/*.bin; poses.txt,\n"
       "times.txt, objects.txt optional) with the tracks of pcl_movers_detect, or renders PNG\n"
       "screenshots. The overlay shows `frame I/N (file NNNNNN)`: I is tracks.csv's `frame`, the\n"
@@ -158,7 +170,7 @@ void printHelp(const char* program) {
       "Colours: ground dark grey, movers red with orange boxes, arrows and trails; stationary\n"
       "tracks in cool per-track colours; other points grey by height; ground truth magenta;\n"
       "the selected track yellow.\n",
-      program, program, optionTable().help().c_str());
+      program, program, program, optionTable().help().c_str());
 }
 
 double parseNumber(const std::string& option, const std::string& text, double lo, double hi) {
@@ -176,15 +188,28 @@ ViewerParameters parseParameters(int argc, char** argv, std::string& sequence) {
   const auto args = optionTable().parse(argc, argv);
   ViewerParameters p;
   args.get("--pcap", p.pcap);
-  args.get("--sensor", p.sensor);
+  args.get("--sensor", p.sensor_name);
   args.get("--calibration", p.calibration);
-  if (p.pcap.empty()) {
+  p.live_sensor = args.has("--live") && p.pcap.empty() && args.positional.empty();
+  std::string v;
+  if (args.get("--port", v)) p.port = static_cast<int>(parseNumber("--port", v, 1, 65535));
+  if (args.get("--timeout", v)) p.timeout = parseNumber("--timeout", v, 0.1, 3600);
+  if (!p.live_sensor && (args.has("--port") || args.has("--timeout")))
+    throw InputError("--port and --timeout are for --live without SEQUENCE (a sensor)");
+  if (p.live_sensor) {
+    if (p.sensor_name == "auto")
+      throw InputError(
+          "--live without SEQUENCE listens to a sensor: give --sensor hdl32, hdl64 "
+          "or vlp16");
+  } else if (p.pcap.empty()) {
     if (args.positional.size() != 1)
       throw InputError("expected exactly one SEQUENCE folder, got " +
                        std::to_string(args.positional.size()) + " (see -h)");
     sequence = args.positional.front();
     if (args.has("--sensor") || !p.calibration.empty())
-      throw InputError("--sensor and --calibration are for --pcap (a sequence folder is decoded)");
+      throw InputError(
+          "--sensor and --calibration are for --pcap or a --live sensor (a sequence folder is "
+          "decoded)");
   } else if (!args.positional.empty()) {
     throw InputError("--pcap " + p.pcap + " and SEQUENCE " + args.positional.front() +
                      " exclude each other: give one");
@@ -195,7 +220,6 @@ ViewerParameters parseParameters(int argc, char** argv, std::string& sequence) {
   args.get("--size", p.size);
   args.get("--camera", p.camera);
   args.get("--format", p.format);
-  std::string v;
   if (args.get("--point-size", v)) p.point_size = parseNumber("--point-size", v, 1, 20);
   if (args.get("--trail", v)) p.trail = static_cast<int>(parseNumber("--trail", v, 0, 1000));
   if (args.get("--arrow-seconds", v)) p.arrow_seconds = parseNumber("--arrow-seconds", v, 0, 60);
@@ -371,64 +395,137 @@ void applyPointLabels(const std::string& path, std::size_t points, viz::PointLab
   }
 }
 
-/** The frames the viewer shows: a sequence folder, or the full sweeps of a Velodyne capture
- * (--pcap) decoded once, in order, and held in memory: the viewer steps back and forth, and a
- * capture can only be read forward. A capture's frame i is its i-th full sweep, as for
- * pcl_movers_detect --pcap; its time is the sweep's first firing after the first sweep's. */
+/** The frames the viewer shows: a sequence folder, the full sweeps of a Velodyne capture
+ * (--pcap) decoded once, in order, and held in memory (the viewer steps back and forth, and a
+ * capture can only be read forward), or a live sensor's sweeps (--live without SEQUENCE), appended
+ * by a receiving thread as they complete, the last kLiveKept of them held. A sweep's frame i is
+ * its i-th full sweep, as for pcl_movers_detect --pcap/--live; its time is its first firing
+ * after the first sweep's. */
 class FrameSource {
  public:
+  static constexpr std::size_t kLiveKept = 600;  ///< a minute of a 10 Hz sensor
+
+  FrameSource() = default;
+  FrameSource(const FrameSource&) = delete;
+  FrameSource& operator=(const FrameSource&) = delete;
+  ~FrameSource() { stop(); }
+
   void openFolder(const std::string& folder, double rate_hz) { reader_.open(folder, rate_hz); }
   /** Decodes the sweeps 0..`last` (all when `last` is SIZE_MAX), with a progress line. */
   void openCapture(const std::string& pcap, io::VelodyneModel model, const std::string& calibration,
                    std::size_t last) {
-    pcap_ = pcap;
+    name_ = pcap;
     io::VelodyneCapture capture(pcap, model, calibration);
     io::VelodyneSweep sweep;
-    while (sweeps_.size() <= last && capture.next(sweep)) {
-      if (sweeps_.empty()) start_ = sweep.start_time;
-      times_.push_back(sweep.start_time - start_);
-      sweeps_.push_back(sweep.cloud);
-      if (sweeps_.size() % 100 == 0)
-        print_info("[%s] %zu sweeps decoded from %s\n", kTool, sweeps_.size(), pcap.c_str());
+    while (size() <= last && capture.next(sweep)) {
+      append(sweep);
+      if (size() % 100 == 0)
+        print_info("[%s] %zu sweeps decoded from %s\n", kTool, size(), pcap.c_str());
     }
-    print_info("[%s] %s: %zu full %s sweeps\n", kTool, pcap.c_str(), sweeps_.size(),
+    ended_ = true;
+    print_info("[%s] %s: %zu full %s sweeps\n", kTool, pcap.c_str(), size(),
                io::velodyneModelName(model).c_str());
   }
-  bool isCapture() const { return !pcap_.empty(); }
-  std::size_t size() const { return isCapture() ? sweeps_.size() : reader_.size(); }
-  bool empty() const { return size() == 0; }
-  void read(std::size_t i, pcl::PointCloud<pcl::PointXYZI>& cloud) const {
-    if (isCapture())
-      cloud = *sweeps_.at(i);
-    else
-      reader_.read(i, cloud);
+  /** Listens to a sensor on UDP `port` (PCL's grabber) and receives on a thread of its own. */
+  void openLive(int port, io::VelodyneModel model, const std::string& calibration, double timeout) {
+    name_ = "udp:" + std::to_string(port);
+    live_ = io::VelodyneCapture::listen(port, model, calibration, timeout);
+    receiver_ = std::thread([this] { receive(); });
   }
-  double time(std::size_t i) const { return isCapture() ? times_.at(i) : reader_.time(i); }
-  bool hasPoses() const { return !isCapture() && reader_.hasPoses(); }
+  /** Live: stops listening (the frames received stay). */
+  void stop() {
+    if (live_) live_->stop();
+    if (receiver_.joinable()) receiver_.join();
+  }
+  /** Waits until frame i has arrived; false when the sensor stream ended before it. Throws the
+   * receiver's error (no data packet for the timeout). A folder or capture does not wait. */
+  bool waitFor(std::size_t i) const {
+    if (!isSweeps()) return i < reader_.size();
+    std::unique_lock<std::mutex> lock(mutex_);
+    arrived_.wait(lock, [&] { return times_.size() > i || ended_; });
+    if (!error_.empty() && times_.size() <= i) throw InputError(name_ + ": " + error_);
+    return times_.size() > i || !isSweeps();
+  }
+  bool isSweeps() const { return !name_.empty(); }
+  bool isLive() const { return live_ != nullptr; }
+  std::size_t size() const {
+    if (!isSweeps()) return reader_.size();
+    std::lock_guard<std::mutex> lock(mutex_);
+    return times_.size();
+  }
+  bool empty() const { return size() == 0; }
+  /** Frame i is still held (a live source drops sweeps older than kLiveKept). */
+  bool held(std::size_t i) const {
+    if (!isSweeps()) return i < reader_.size();
+    std::lock_guard<std::mutex> lock(mutex_);
+    return i < sweeps_.size() && sweeps_[i];
+  }
+  void read(std::size_t i, pcl::PointCloud<pcl::PointXYZI>& cloud) const {
+    if (!isSweeps()) return reader_.read(i, cloud);
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (i >= sweeps_.size() || !sweeps_[i])
+      throw InputError(framePath(i) + ": not held (a live view keeps the last " +
+                       std::to_string(kLiveKept) + " sweeps)");
+    cloud = *sweeps_[i];
+  }
+  double time(std::size_t i) const {
+    if (!isSweeps()) return reader_.time(i);
+    std::lock_guard<std::mutex> lock(mutex_);
+    return times_.at(i);
+  }
+  bool hasPoses() const { return !isSweeps() && reader_.hasPoses(); }
   Eigen::Isometry3d pose(std::size_t i) const { return reader_.pose(i); }
   /** Screenshot and label file stem: the file's, or the sweep index in six digits. */
   std::string frameName(std::size_t i) const {
-    if (!isCapture()) return reader_.frameName(i);
+    if (!isSweeps()) return reader_.frameName(i);
     char name[32];
     std::snprintf(name, sizeof(name), "%06zu", i);
     return name;
   }
   long long frameNumber(std::size_t i) const {
-    return isCapture() ? static_cast<long long>(i) : reader_.frameNumber(i);
+    return isSweeps() ? static_cast<long long>(i) : reader_.frameNumber(i);
   }
   /** Frame i named for messages. */
   std::string framePath(std::size_t i) const {
-    return isCapture() ? pcap_ + " sweep " + std::to_string(i) : reader_.framePaths().at(i);
+    return isSweeps() ? name_ + " sweep " + std::to_string(i) : reader_.framePaths().at(i);
   }
-  /** The sequence folder (empty for a capture). */
+  /** The sequence folder (empty for sweeps). */
   const io::SequenceReader& folder() const { return reader_; }
 
  private:
+  void append(const io::VelodyneSweep& sweep) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (times_.empty()) start_ = sweep.start_time;
+    times_.push_back(sweep.start_time - start_);
+    sweeps_.push_back(sweep.cloud);
+    if (isLive() && sweeps_.size() > kLiveKept) sweeps_[sweeps_.size() - kLiveKept - 1].reset();
+    arrived_.notify_all();
+  }
+  void receive() {
+    std::string error;
+    try {
+      io::VelodyneSweep sweep;
+      while (live_->next(sweep)) append(sweep);
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+    std::lock_guard<std::mutex> lock(mutex_);
+    error_ = error;
+    ended_ = true;
+    arrived_.notify_all();
+  }
+
   io::SequenceReader reader_;
-  std::string pcap_;
+  std::string name_;  ///< the capture or "udp:PORT"; empty for a folder
+  std::unique_ptr<io::VelodyneCapture> live_;
+  std::thread receiver_;
+  mutable std::mutex mutex_;  ///< guards what follows (the receiver appends)
+  mutable std::condition_variable arrived_;
   std::vector<pcl::PointCloud<pcl::PointXYZI>::ConstPtr> sweeps_;
   std::vector<double> times_;
   double start_ = 0.0;
+  bool ended_ = false;
+  std::string error_;
 };
 
 /** Everything the viewer shows, loaded and validated before any window opens. */
@@ -448,16 +545,27 @@ void loadCapture(const ViewerParameters& p, SceneData& scene) {
   if (!fs::is_regular_file(p.pcap, ec))
     throw InputError(p.pcap, 0,
                      fs::exists(p.pcap, ec) ? "--pcap: not a file" : "--pcap: does not exist");
-  const auto model =
-      p.sensor == "auto" ? io::detectVelodyneModel(p.pcap) : io::velodyneModelFromName(p.sensor);
+  const auto model = p.sensor_name == "auto" ? io::detectVelodyneModel(p.pcap)
+                                             : io::velodyneModelFromName(p.sensor_name);
   const std::size_t last =
       p.frames.empty() ? SIZE_MAX : viz::parseFrameRange(p.frames, SIZE_MAX).last;
   scene.source.openCapture(p.pcap, model, p.calibration, last);
   if (scene.source.empty()) throw InputError(p.pcap, 0, "no full sweep in the capture");
 }
 
+/** --live without SEQUENCE: listens to the sensor and waits for its first sweep. */
+void loadLive(const ViewerParameters& p, SceneData& scene) {
+  const auto model = io::velodyneModelFromName(p.sensor_name);
+  scene.source.openLive(p.port, model, p.calibration, p.timeout);
+  print_info("[%s] listening to a %s on UDP port %d\n", kTool, io::velodyneModelName(model).c_str(),
+             p.port);
+  if (!scene.source.waitFor(0))
+    throw InputError("udp:" + std::to_string(p.port) + ": the sensor stream ended before a sweep");
+}
+
 void loadScene(const std::string& sequence, const ViewerParameters& p, SceneData& scene) {
   if (!p.pcap.empty()) return loadCapture(p, scene);
+  if (p.live_sensor) return loadLive(p, scene);
   std::error_code ec;
   if (!fs::exists(sequence, ec)) throw InputError(sequence, 0, "no such sequence folder");
   if (!fs::is_directory(sequence, ec)) throw InputError(sequence, 0, "not a folder");
@@ -946,7 +1054,7 @@ int runInteractive(const SceneData& scene, const ViewerParameters& p, viz::Frame
   if (p.live) live.reset(new LiveDetector(scene, p, range.first));
   renderer.setLive(live.get());
   std::size_t frame = range.first;
-  bool playing = false, dirty = true, camera_dirty = true, screenshot = false;
+  bool playing = scene.source.isLive(), dirty = true, camera_dirty = true, screenshot = false;
   double speed = 1.0;
   renderer.style()->handler = [&](const std::string& sym, char code) {
     if (sym == "space" || code == ' ') {
@@ -954,11 +1062,11 @@ int runInteractive(const SceneData& scene, const ViewerParameters& p, viz::Frame
       dirty = true;
     } else if (sym == "Right" || code == 'n') {
       playing = false;
-      frame = frame < range.last ? frame + 1 : range.last;
+      if (frame < range.last && scene.source.held(frame + 1)) ++frame;
       dirty = true;
     } else if (sym == "Left" || code == 'p') {
       playing = false;
-      frame = frame > range.first ? frame - 1 : range.first;
+      if (frame > range.first && scene.source.held(frame - 1)) --frame;
       dirty = true;
     } else if (sym == "plus" || sym == "KP_Add" || sym == "equal" || code == '+' || code == '=') {
       speed = std::min(speed * 2.0, 16.0);
@@ -997,7 +1105,10 @@ int runInteractive(const SceneData& scene, const ViewerParameters& p, viz::Frame
       print_info("[%s] saved %s\n", kTool, name.c_str());
     }
     renderer.viewer().spinOnce(15, true);
-    if (playing) {
+    if (playing && scene.source.isLive()) {  // a sensor: follow its newest sweep
+      const std::size_t newest = std::min(range.last, scene.source.size() - 1);
+      if (newest != frame) frame = newest, dirty = true;
+    } else if (playing) {
       const double dt =
           frame + 1 < scene.source.size()
               ? std::max(1e-3, scene.source.time(frame + 1) - scene.source.time(frame))
@@ -1013,6 +1124,26 @@ int runInteractive(const SceneData& scene, const ViewerParameters& p, viz::Frame
   return 0;
 }
 
+/** The frames to show: --frames within the sequence or capture; a live sensor's are waited for
+ * (off-screen, up to the last one asked for: --frames A:B is required there). */
+viz::FrameRange frameRange(const ViewerParameters& p, const FrameSource& source) {
+  if (!source.isLive())
+    return p.frames.empty() ? viz::FrameRange{0, source.size() - 1}
+                            : viz::parseFrameRange(p.frames, source.size());
+  constexpr std::size_t kOpen = std::numeric_limits<std::size_t>::max() / 2;
+  const viz::FrameRange range =
+      p.frames.empty() ? viz::FrameRange{0, kOpen - 1} : viz::parseFrameRange(p.frames, kOpen);
+  const bool offscreen = !p.screenshot_dir.empty();
+  if (offscreen && range.last == kOpen - 1)
+    throw InputError(
+        "--live sensor with --screenshot-dir: give --frames A:B (the sweeps to render)");
+  const std::size_t wait = offscreen ? range.last : range.first;
+  if (!source.waitFor(wait))
+    throw InputError(source.framePath(wait) + ": the sensor stream ended after " +
+                     std::to_string(source.size()) + " sweeps");
+  return range;
+}
+
 int run(int argc, char** argv) {
   if (tools::wantsHelp(argc, argv)) {
     printHelp(argv[0]);
@@ -1024,9 +1155,7 @@ int run(int argc, char** argv) {
   const auto camera = viz::parseCameraPreset(p.camera);
   SceneData scene;
   loadScene(sequence, p, scene);
-  const viz::FrameRange range = p.frames.empty()
-                                    ? viz::FrameRange{0, scene.source.size() - 1}
-                                    : viz::parseFrameRange(p.frames, scene.source.size());
+  const viz::FrameRange range = frameRange(p, scene.source);
   // Everything that can be checked without a display is checked first, so a bad input is reported
   // as such on any machine: the first frame must be readable, the output folder usable.
   {

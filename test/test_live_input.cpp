@@ -18,6 +18,8 @@
 
 #include <atomic>
 #include <chrono>
+#include <cstdio>
+#include <cstdlib>
 #include <map>
 #include <set>
 #include <thread>
@@ -227,4 +229,64 @@ TEST_F(LiveInput, ClearErrors) {
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("exclude each other"), std::string::npos) << r.err;
   EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 50.0);
+}
+
+namespace {
+
+/** Pixels of the viewer's mover red in a binary PPM (P6) written by --format ppm; -1 when the
+ * file is not one. */
+int moverRedPixels(const std::string& path) {
+  const std::string data = readFile(path);
+  int width = 0, height = 0, max = 0, used = 0;
+  if (std::sscanf(data.c_str(), "P6 %d %d %d%n", &width, &height, &max, &used) != 3 || max != 255)
+    return -1;
+  const std::size_t start = static_cast<std::size_t>(used) + 1;  // one whitespace after 255
+  if (data.size() < start + 3u * width * height) return -1;
+  int red = 0;
+  for (std::size_t k = start; k + 2 < data.size(); k += 3) {
+    const auto r = static_cast<unsigned char>(data[k]), g = static_cast<unsigned char>(data[k + 1]),
+               b = static_cast<unsigned char>(data[k + 2]);
+    red += r > 200 && g < 90 && b < 90;
+  }
+  return red;
+}
+
+}  // namespace
+
+// pcl_movers_viewer --live without SEQUENCE: the sweeps of a sensor (the capture replayed to
+// 127.0.0.1) are received, detected and drawn; the mover is red by sweep 30, not on sweep 0.
+// A silent port is a clear error naming it, not a hang; a sensor needs --sensor.
+class LiveViewer : public LiveInput {};  // its own name: the sanitizer job runs viewers apart
+
+TEST_F(LiveViewer, ShowsTheMoversOfALiveSensor) {
+  const char* display = std::getenv("DISPLAY");
+  if (!display || !*display) GTEST_SKIP() << "no X display: run the tests under xvfb-run";
+  if (!test_util::toolBuilt("viewer")) GTEST_SKIP() << "pcl_movers_viewer not built";
+  const auto start = std::chrono::steady_clock::now();
+  const int port = freeUdpPort();
+  {
+    Replayer replay(pcap(), port, 4.0, 1.5);  // after the viewer listens
+    const auto r =
+        runTool("viewer", {"--live", "--sensor", "hdl32", "--port", std::to_string(port),
+                           "--timeout", "10", "--frames", "0:30", "--size", "320x240", "--format",
+                           "ppm", "--camera", "bird", "--screenshot-dir", out("shots")});
+    ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+    EXPECT_NE(r.out.find("listening"), std::string::npos) << r.out;
+  }
+  std::size_t images = 0;
+  for (const auto& e : std::filesystem::directory_iterator(out("shots")))
+    images += e.path().extension() == ".ppm";
+  EXPECT_EQ(images, 31u);
+  EXPECT_EQ(moverRedPixels(out("shots/000000.ppm")), 0);
+  EXPECT_GT(moverRedPixels(out("shots/000030.ppm")), 10);
+  auto r =
+      runTool("viewer", {"--live", "--sensor", "hdl32", "--port", std::to_string(port), "--timeout",
+                         "1", "--frames", "0:3", "--screenshot-dir", out("none")});
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find(std::to_string(port)), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(out("none")));
+  r = runTool("viewer", {"--live", "--frames", "0:3", "--screenshot-dir", out("none")});
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("--sensor"), std::string::npos) << r.err;
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 60.0);
 }
