@@ -61,6 +61,9 @@ TEST(CorpusReport, SpeedBands) {
 TEST(CorpusReport, WhyMissed) {
   EXPECT_EQ(missReason(target(1, "Car", 50, 0, -1, 0, 5), true), "never its own object");
   EXPECT_EQ(missReason(target(1, "Car", 50, 0, -1, 30, 5), true), "tracked, never a mover");
+  auto failing = target(1, "Car", 50, 0, -1, 30, 5);
+  failing.missed_by_reason = {{"no row", 30}, {"young", 5}, {"no_free_space", 15}};
+  EXPECT_EQ(missReason(failing, true), "tracked, never a mover: no_free_space");
   EXPECT_EQ(missReason(target(1, "Car", 50, 20, 25, 30, 5), true, 10), "late (25 frames)");
   EXPECT_EQ(missReason(target(1, "Car", 50, 10, 2, 30, 5), true), "intermittent");
   EXPECT_EQ(missReason(target(1, "Car", 50, 40, 2, 45, 5), true), "missed 10 frames");
@@ -83,6 +86,11 @@ TEST(CorpusReport, AggregatesByFamilySensorClassAndSpeed) {
   runs[0].mos.static_as_static = 1000;
   runs[1].mos.moving_as_moving = 10;
   runs[1].mos.moving_as_none = 30;
+  // Missed frames by reason, registration only: urban 15 without a row and 10 young, highway's
+  // pedestrian 10 without a row; the centroid run's are not counted.
+  runs[1].score.targets[0].missed_by_reason = {{"no row", 15}, {"young", 10}};
+  runs[0].score.targets[1].missed_by_reason = {{"no row", 10}};
+  runs[2].score.targets[0].missed_by_reason = {{"no_motion", 50}};
   CorpusReportOptions options;
   const std::string report = formatCorpusReport(runs, options);
   // Overall, registration: targets 100 %, 0 %, 50 % → mean 50.0; FA 6 in 200 frames.
@@ -104,6 +112,13 @@ TEST(CorpusReport, AggregatesByFamilySensorClassAndSpeed) {
   EXPECT_NE(row(report, "### By class", "Pedestrian").find("| 0.0 |"), std::string::npos);
   EXPECT_NE(row(report, "### By speed band", "> 15 m/s").find("| 100.0 |"), std::string::npos);
   EXPECT_NE(row(report, "### By speed band", "< 1 m/s").find("| 0.0 |"), std::string::npos);
+  const std::string why = "### Why visible frames were missed";
+  EXPECT_NE(report.find("| family | missed frames | no row | young |", report.find(why)),
+            std::string::npos)
+      << report;
+  EXPECT_EQ(row(report, why, "urban"), "| urban | 25 | 60.0 | 40.0 |") << report;
+  EXPECT_EQ(row(report, why, "highway"), "| highway | 10 | 100.0 | 0.0 |") << report;
+  EXPECT_EQ(row(report, why, "all"), "| all | 35 | 71.4 | 28.6 |") << report;
   // The worst target first: the pedestrian, never its own object.
   const std::size_t worst = report.find("worst targets");
   ASSERT_NE(worst, std::string::npos);

@@ -474,6 +474,7 @@ TEST(DetectionMetrics, TrackedFramesFirstTrackedAndMedianSpeed) {
     objects.push_back(object(f, 4, 20.0, 0.0, true, f < 2 ? 5 : 100));
     objects.back().speed = f;
     if (f >= 1) tracks.push_back(row(f, 8, 20.4, f == 5 ? 4.5 : 0.3, f >= 7));
+    if (f >= 1 && f != 3) tracks.back().reason = f >= 7 ? "latched" : "no_motion";
   }
   objects.push_back(object(0, 9, 40.0, 0.0, true, 5));  // never visible
   const auto s = scoreDetections(objects, tracks);
@@ -484,6 +485,9 @@ TEST(DetectionMetrics, TrackedFramesFirstTrackedAndMedianSpeed) {
   EXPECT_EQ(t.first_tracked, 2);
   EXPECT_EQ(t.hits, 3);
   EXPECT_NEAR(t.median_speed, 5.5, 1e-12);  // median of 2..9
+  // Missed visible frames 2-6: the row's reason, "unknown" without one (3), "no row" (5).
+  const std::map<std::string, int> missed = {{"no row", 1}, {"no_motion", 3}, {"unknown", 1}};
+  EXPECT_EQ(t.missed_by_reason, missed);
   EXPECT_EQ(s.targets[1].tracked_frames, 0);
   EXPECT_EQ(s.targets[1].first_tracked, -1);
   EXPECT_TRUE(std::isnan(s.targets[1].median_speed));
@@ -492,6 +496,9 @@ TEST(DetectionMetrics, TrackedFramesFirstTrackedAndMedianSpeed) {
             std::string::npos)
       << js;
   EXPECT_NE(js.find("\"tracked_frames\": 0, \"first_tracked\": -1, \"median_speed\": null"),
+            std::string::npos)
+      << js;
+  EXPECT_NE(js.find("\"missed_by_reason\": {\"no row\": 1, \"no_motion\": 3, \"unknown\": 1}"),
             std::string::npos)
       << js;
 }

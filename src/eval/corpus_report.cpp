@@ -211,11 +211,62 @@ std::string speedBand(double speed) {
 
 std::string missReason(const TargetScore& t, bool run_ok, int late_frames) {
   if (!run_ok) return "run failed";
-  if (t.hits == 0) return t.tracked_frames == 0 ? "never its own object" : "tracked, never a mover";
+  if (t.hits == 0 && t.tracked_frames == 0) return "never its own object";
+  if (t.hits == 0) {
+    // The decision test its rows failed most often (frames without any row aside).
+    const std::pair<const std::string, int>* most = nullptr;
+    for (const auto& m : t.missed_by_reason)
+      if (m.first != "no row" && (!most || m.second > most->second)) most = &m;
+    return most ? "tracked, never a mover: " + most->first : "tracked, never a mover";
+  }
   if (t.delay > late_frames) return "late (" + std::to_string(t.delay) + " frames)";
   return t.hitRate() < 0.5 ? "intermittent"
                            : "missed " + std::to_string(t.visible_frames - t.hits) + " frames";
 }
+
+namespace {
+
+/** Missed visible frames of `mode` by reason (TargetScore::missed_by_reason), per family. */
+std::string missedByReasonTable(const std::vector<CorpusRun>& runs, const std::string& mode) {
+  std::map<std::string, std::map<std::string, int>> by_family;  // family -> reason -> frames
+  std::set<std::string> reasons;
+  for (const CorpusRun& r : runs) {
+    if (r.mode != mode) continue;
+    for (const TargetScore& t : r.score.targets)
+      for (const auto& m : t.missed_by_reason) {
+        by_family[r.family][m.first] += m.second;
+        by_family["all"][m.first] += m.second;
+        reasons.insert(m.first);
+      }
+  }
+  if (reasons.empty()) return "No missed frame.\n";
+  // "no row" first, then the decision's tests in their order, then any other.
+  std::vector<std::string> columns;
+  for (const char* r : {"no row", "new", "large", "young", "low", "no_motion", "no_free_space"})
+    if (reasons.erase(r)) columns.push_back(r);
+  columns.insert(columns.end(), reasons.begin(), reasons.end());
+  std::ostringstream out;
+  out << "| family | missed frames |";
+  for (const auto& c : columns) out << " " << c << " |";
+  out << "\n|---|---:|";
+  for (std::size_t k = 0; k < columns.size(); ++k) out << "---:|";
+  out << "\n";
+  for (const char* family : {"highway", "urban", "parking", "open", "trail", "all"}) {
+    const auto it = by_family.find(family);
+    if (it == by_family.end()) continue;
+    int total = 0;
+    for (const auto& m : it->second) total += m.second;
+    out << "| " << family << " | " << total << " |";
+    for (const auto& c : columns) {
+      const auto f = it->second.find(c);
+      out << " " << fixed(100.0 * (f == it->second.end() ? 0 : f->second) / total, 1) << " |";
+    }
+    out << "\n";
+  }
+  return out.str();
+}
+
+}  // namespace
 
 std::string formatCorpusReport(const std::vector<CorpusRun>& runs,
                                const CorpusReportOptions& options) {
@@ -269,10 +320,17 @@ std::string formatCorpusReport(const std::vector<CorpusRun>& runs,
              runs, "speed", speedBands(), nullptr,
              [](const CorpusRun&, const TargetScore& t) { return speedBand(t.median_speed); })
       << "\n";
+  out << "### Why visible frames were missed (" << modes[0] << ")\n\n"
+      << "Each visible frame without a hit, by the tracks.csv `reason` of the row in the "
+         "target's box nearest its centre (the mover decision's test that row failed, "
+         "docs/design.md), or *no row* when no tracked row is in the box (segmentation joined the "
+         "target to something, or it was not tracked); % of the missed frames.\n\n"
+      << missedByReasonTable(runs, modes[0]) << "\n";
   out << "### The " << options.worst << " worst targets (" << modes[0] << ")\n\n"
       << "Why: *never its own object* = no tracked row in its box in any visible frame "
          "(segmentation joined it to something, or it was never tracked); *tracked, never a "
-         "mover*; *late* = first hit more than "
+         "mover: REASON*, the decision test its rows failed most often; *late* = first hit more "
+         "than "
       << options.late_frames << " frames after it became visible; *intermittent* = hit in time "
       << "but in under half of its frames.\n\n"
       << worstTargets(runs, options) << "\n";
@@ -308,7 +366,13 @@ std::string formatCorpusJson(const std::vector<CorpusRun>& runs) {
           << ", \"hits\": " << t.hits << ", \"delay\": " << t.delay
           << ", \"tracked\": " << t.tracked_frames << ", \"speed\": " << jsonNumber(t.median_speed)
           << ", \"vel_rms\": " << jsonNumber(t.rms_velocity_error)
-          << ", \"vel_n\": " << t.velocity_samples << "}";
+          << ", \"vel_n\": " << t.velocity_samples << ", \"missed_by_reason\": {";
+      bool first_reason = true;
+      for (const auto& m : t.missed_by_reason) {
+        out << (first_reason ? "" : ", ") << jsonString(m.first) << ": " << m.second;
+        first_reason = false;
+      }
+      out << "}}";
       first = false;
     }
     out << "]}\n";

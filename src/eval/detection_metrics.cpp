@@ -100,6 +100,29 @@ bool anyRowIn(const io::GroundTruthObject& o, const std::vector<const io::TrackR
   return false;
 }
 
+/** `"reason": count, ...` (sorted by reason). */
+std::string reasonCountsJson(const std::map<std::string, int>& counts) {
+  std::string out;
+  for (const auto& c : counts)
+    out += (out.empty() ? "" : ", ") + jsonString(c.first) + ": " + std::to_string(c.second);
+  return out;
+}
+
+/** The row whose centroid lies in the grown box nearest (horizontally) its centre; null if none. */
+const io::TrackRow* nearestRowIn(const io::GroundTruthObject& o,
+                                 const std::vector<const io::TrackRow*>& rows,
+                                 const DetectionMetricsParams& params) {
+  const io::TrackRow* best = nullptr;
+  double best_d = std::numeric_limits<double>::infinity();
+  for (const auto* r : rows) {
+    const Eigen::Vector3d c(r->x, r->y, r->z);
+    if (!o.contains(c, params.grow_xy, params.grow_z)) continue;
+    const double d = (c - o.center).head<2>().norm();
+    if (d < best_d) best_d = d, best = r;
+  }
+  return best;
+}
+
 /** False alarms: mover rows in the sector outside every target's grown box of their frame; those
  * in no labelled box that project into a DontCare box are ignored instead. */
 void countFalseAlarms(const RowsByFrame& movers_by_frame, const ObjectsByFrame& objects_by_frame,
@@ -211,18 +234,12 @@ DetectionScore scoreDetections(const std::vector<io::GroundTruthObject>& objects
         if (t.first_tracked < 0) t.first_tracked = frame;
       }
       // The hitting row nearest the box centre carries the velocity estimate we score.
-      const io::TrackRow* best = nullptr;
-      double best_d = std::numeric_limits<double>::infinity();
-      for (const auto* r : movers) {
-        const Eigen::Vector3d c(r->x, r->y, r->z);
-        if (!o->contains(c, params.grow_xy, params.grow_z)) continue;
-        const double d = (c - o->center).head<2>().norm();
-        if (d < best_d) {
-          best_d = d;
-          best = r;
-        }
+      const io::TrackRow* best = nearestRowIn(*o, movers, params);
+      if (!best) {
+        const io::TrackRow* row = nearestRowIn(*o, rows, params);
+        ++t.missed_by_reason[!row ? "no row" : row->reason.empty() ? "unknown" : row->reason];
+        continue;
       }
-      if (!best) continue;
       ++t.hits;
       if (moving_now) ++t.moving_hits;
       if (t.first_hit < 0) t.first_hit = frame;
@@ -363,7 +380,8 @@ std::string formatJson(const DetectionScore& score) {
         << ", \"first_tracked\": " << t.first_tracked
         << ", \"median_speed\": " << jsonNumber(t.median_speed, 3)
         << ", \"extra_moving_frames\": " << t.moving_frames
-        << ", \"extra_moving_hit_rate\": " << jsonNumber(t.movingHitRate()) << "}";
+        << ", \"extra_moving_hit_rate\": " << jsonNumber(t.movingHitRate())
+        << ", \"missed_by_reason\": {" << reasonCountsJson(t.missed_by_reason) << "}}";
   }
   out << "\n  ]\n}\n";
   return out.str();

@@ -39,7 +39,8 @@ std::string speedBand(double speed);
 /** \brief Why a target was missed or hit late, for the worst-targets table:
  * - "never its own object": no row of tracks.csv (mover or not) in its box in any visible frame:
  *   segmentation merged it into something else, or it was never tracked;
- * - "tracked, never a mover": tracked as its own object but never declared a mover;
+ * - "tracked, never a mover": tracked as its own object but never declared a mover, followed
+ *   by ": REASON", the decision test its rows failed most often (TargetScore::missed_by_reason);
  * - "late (N frames)": first hit more than `late_frames` frames after it became visible;
  * - "intermittent": hit, in time, but in under half of its frames; else "missed N frames";
  * - "run failed" when the run did not finish. */

@@ -9,6 +9,7 @@
 
 #include <Eigen/Geometry>
 #include <limits>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -80,6 +81,10 @@ struct TargetScore {
   int tracked_frames = 0;
   /** \brief Diagnostic: first visible frame counted in tracked_frames; -1 when never. */
   int first_tracked = -1;
+  /** \brief Diagnostic: the visible frames without a hit, by why: the tracks.csv `reason` of the
+   * row in the grown box nearest its centre (the mover decision's test that row failed;
+   * "unknown" for files without the column), or "no row" when no row is in the box. */
+  std::map<std::string, int> missed_by_reason;
   /** \brief Median of the target's objects.txt `speed_mps` over its visible frames [m/s]; NaN
    * when never visible. */
   double median_speed = std::numeric_limits<double>::quiet_NaN();
