@@ -32,7 +32,8 @@ command -v ninja >/dev/null && GENERATOR=(-G Ninja)
 
 # PCL/VTK/Boost are not instrumented; ASan still sees every malloc/free of the process. Third-party
 # leaks go in scripts/lsan.supp with a comment naming the library and why the leak is not ours
-# (one today: libpcap's handle in PCL's capture thread; see docs/reliability.md).
+# (two today: libpcap's handle in PCL's capture thread, and the packets left in PCL's HDLGrabber queue
+# when a live grabber stops; see docs/reliability.md).
 export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:strict_string_checks=1:detect_stack_use_after_return=1:check_initialization_order=1"
 export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1"
 if [[ -f "$ROOT/scripts/lsan.supp" ]]; then
