@@ -128,9 +128,12 @@ tools::OptionTable optionTable() {
         "frame i is the capture's i-th full sweep, as in\npcl_movers_detect --pcap; poses "
         "estimated. The sweeps are decoded\nonce and held in memory (about 1 MB per HDL-32E "
         "sweep): --frames\nA:B views part of a long capture"},
-       {"--sensor", "NAME", "--pcap: hdl32, hdl64 or vlp16; auto: from the first data packet",
+       {"--sensor", "NAME",
+        "--pcap, --live sensor: hdl32, hdl64 or vlp16; auto (--pcap only):\nfrom the first data "
+        "packet",
         d.sensor_name},
-       {"--calibration", "XML", "--pcap: VeloView/PCL calibration (db.xml; required for hdl64)"},
+       {"--calibration", "XML",
+        "--pcap, --live sensor: VeloView/PCL calibration (db.xml; required\nfor hdl64)"},
        {"--ground-truth", "", "also draw the ground-truth boxes of SEQUENCE/objects.txt (magenta)"},
        {"--frames", "A:B",
         "frames to show or render, 0-based inclusive (tracks.csv's `frame`);\nA:, :B, A also "
@@ -444,7 +447,7 @@ class FrameSource {
     std::unique_lock<std::mutex> lock(mutex_);
     arrived_.wait(lock, [&] { return times_.size() > i || ended_; });
     if (!error_.empty() && times_.size() <= i) throw InputError(name_ + ": " + error_);
-    return times_.size() > i || !isSweeps();
+    return times_.size() > i;
   }
   bool isSweeps() const { return !name_.empty(); }
   bool isLive() const { return live_ != nullptr; }

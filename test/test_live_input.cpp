@@ -18,12 +18,12 @@
 
 #include <atomic>
 #include <chrono>
-#include <cstdio>
 #include <cstdlib>
 #include <map>
 #include <set>
 #include <thread>
 
+#include "test_image.h"
 #include "test_util.h"
 
 using test_util::readFile;
@@ -231,28 +231,6 @@ TEST_F(LiveInput, ClearErrors) {
   EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 50.0);
 }
 
-namespace {
-
-/** Pixels of the viewer's mover red in a binary PPM (P6) written by --format ppm; -1 when the
- * file is not one. */
-int moverRedPixels(const std::string& path) {
-  const std::string data = readFile(path);
-  int width = 0, height = 0, max = 0, used = 0;
-  if (std::sscanf(data.c_str(), "P6 %d %d %d%n", &width, &height, &max, &used) != 3 || max != 255)
-    return -1;
-  const std::size_t start = static_cast<std::size_t>(used) + 1;  // one whitespace after 255
-  if (data.size() < start + 3u * width * height) return -1;
-  int red = 0;
-  for (std::size_t k = start; k + 2 < data.size(); k += 3) {
-    const auto r = static_cast<unsigned char>(data[k]), g = static_cast<unsigned char>(data[k + 1]),
-               b = static_cast<unsigned char>(data[k + 2]);
-    red += r > 200 && g < 90 && b < 90;
-  }
-  return red;
-}
-
-}  // namespace
-
 // pcl_movers_viewer --live without SEQUENCE: the sweeps of a sensor (the capture replayed to
 // 127.0.0.1) are received, detected and drawn; the mover is red by sweep 30, not on sweep 0.
 // A silent port is a clear error naming it, not a hang; a sensor needs --sensor.
@@ -277,8 +255,11 @@ TEST_F(LiveViewer, ShowsTheMoversOfALiveSensor) {
   for (const auto& e : std::filesystem::directory_iterator(out("shots")))
     images += e.path().extension() == ".ppm";
   EXPECT_EQ(images, 31u);
-  EXPECT_EQ(moverRedPixels(out("shots/000000.ppm")), 0);
-  EXPECT_GT(moverRedPixels(out("shots/000030.ppm")), 10);
+  test_util::Image first, last;
+  ASSERT_TRUE(test_util::readPpm(out("shots/000000.ppm"), first));
+  ASSERT_TRUE(test_util::readPpm(out("shots/000030.ppm"), last));
+  EXPECT_EQ(test_util::countRed(first), 0);
+  EXPECT_GT(test_util::countRed(last), 10);
   auto r =
       runTool("viewer", {"--live", "--sensor", "hdl32", "--port", std::to_string(port), "--timeout",
                          "1", "--frames", "0:3", "--screenshot-dir", out("none")});

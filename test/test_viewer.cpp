@@ -26,6 +26,8 @@
 #include <sstream>
 #include <string>
 
+#include "test_image.h"
+
 namespace fs = std::filesystem;
 using namespace pcl_movers;
 
@@ -74,44 +76,10 @@ RunResult runTool(const std::string& args, const fs::path& log) {
   return r;
 }
 
-/** A binary PPM (P6) as written by `--format ppm`. */
-struct Image {
-  int width = 0, height = 0;
-  std::vector<unsigned char> rgb;
-  const unsigned char* at(int x, int y) const {
-    return &rgb[(static_cast<std::size_t>(y) * width + x) * 3];
-  }
-};
-
-bool readPpm(const fs::path& path, Image& image) {
-  std::ifstream in(path, std::ios::binary);
-  std::string magic;
-  int maxval = 0;
-  in >> magic >> image.width >> image.height >> maxval;
-  if (magic != "P6" || image.width <= 0 || image.height <= 0 || maxval != 255) return false;
-  in.get();
-  image.rgb.resize(static_cast<std::size_t>(image.width) * image.height * 3);
-  in.read(reinterpret_cast<char*>(image.rgb.data()),
-          static_cast<std::streamsize>(image.rgb.size()));
-  return static_cast<bool>(in);
-}
-
-/** The mover colour of SceneStyle (strong red), with tolerance for blending at edges. */
-bool isMoverRed(const unsigned char* p) {
-  return p[0] > 200 && p[1] < 90 && p[2] < 90;
-}
-
-int countRed(const Image& im, int cx, int cy, int radius) {
-  int n = 0;
-  for (int y = std::max(0, cy - radius); y <= std::min(im.height - 1, cy + radius); ++y)
-    for (int x = std::max(0, cx - radius); x <= std::min(im.width - 1, cx + radius); ++x)
-      n += isMoverRed(im.at(x, y));
-  return n;
-}
-
-int countRed(const Image& im) {
-  return countRed(im, im.width / 2, im.height / 2, 1 << 20);
-}
+using test_util::countRed;
+using test_util::Image;
+using test_util::isMoverRed;
+using test_util::readPpm;
 
 /** Red pixels inside the image rectangle covered by a box's projected corners (+ a few pixels). */
 int countRedInBox(const Image& im, const viz::CameraView& cam, const viz::OrientedBox& box,

@@ -366,13 +366,8 @@ std::string formatCorpusJson(const std::vector<CorpusRun>& runs) {
           << ", \"hits\": " << t.hits << ", \"delay\": " << t.delay
           << ", \"tracked\": " << t.tracked_frames << ", \"speed\": " << jsonNumber(t.median_speed)
           << ", \"vel_rms\": " << jsonNumber(t.rms_velocity_error)
-          << ", \"vel_n\": " << t.velocity_samples << ", \"missed_by_reason\": {";
-      bool first_reason = true;
-      for (const auto& m : t.missed_by_reason) {
-        out << (first_reason ? "" : ", ") << jsonString(m.first) << ": " << m.second;
-        first_reason = false;
-      }
-      out << "}}";
+          << ", \"vel_n\": " << t.velocity_samples << ", \"missed_by_reason\": {"
+          << formatReasonCounts(t.missed_by_reason) << "}}";
       first = false;
     }
     out << "]}\n";

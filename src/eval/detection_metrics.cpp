@@ -100,14 +100,6 @@ bool anyRowIn(const io::GroundTruthObject& o, const std::vector<const io::TrackR
   return false;
 }
 
-/** `"reason": count, ...` (sorted by reason). */
-std::string reasonCountsJson(const std::map<std::string, int>& counts) {
-  std::string out;
-  for (const auto& c : counts)
-    out += (out.empty() ? "" : ", ") + jsonString(c.first) + ": " + std::to_string(c.second);
-  return out;
-}
-
 /** The row whose centroid lies in the grown box nearest (horizontally) its centre; null if none. */
 const io::TrackRow* nearestRowIn(const io::GroundTruthObject& o,
                                  const std::vector<const io::TrackRow*>& rows,
@@ -381,10 +373,17 @@ std::string formatJson(const DetectionScore& score) {
         << ", \"median_speed\": " << jsonNumber(t.median_speed, 3)
         << ", \"extra_moving_frames\": " << t.moving_frames
         << ", \"extra_moving_hit_rate\": " << jsonNumber(t.movingHitRate())
-        << ", \"missed_by_reason\": {" << reasonCountsJson(t.missed_by_reason) << "}}";
+        << ", \"missed_by_reason\": {" << formatReasonCounts(t.missed_by_reason) << "}}";
   }
   out << "\n  ]\n}\n";
   return out.str();
+}
+
+std::string formatReasonCounts(const std::map<std::string, int>& counts) {
+  std::string out;
+  for (const auto& c : counts)
+    out += (out.empty() ? "" : ", ") + jsonString(c.first) + ": " + std::to_string(c.second);
+  return out;
 }
 
 // ------------------------------------------------------------------------------------- chart

@@ -98,6 +98,10 @@ struct TargetScore {
   }
 };
 
+/** \brief The members of a JSON object for TargetScore::missed_by_reason: `"reason": count, ...`
+ * (sorted by reason, without the braces). */
+std::string formatReasonCounts(const std::map<std::string, int>& counts);
+
 /** \brief Whole-run result. */
 struct DetectionScore {
   std::vector<TargetScore> targets;  ///< sorted by track id
