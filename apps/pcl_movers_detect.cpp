@@ -105,15 +105,25 @@ pcl_movers::tools::OptionTable optionTable() {
        {"--stop-after-frames", "N", "stop as on SIGINT after N frames (for tests)"},
        {"--print-config", "", "print the parameters as a config file and exit"},
        {"", "",
-        "\nParameters (--name VALUE, or 'name = value' in the config file, where the\n"
-        "snake_case key, sensor_height, also works):"}});
-  DetectorParameters().forEachParameter([&](const char* key, const auto& value, const char* doc) {
-    using T = std::decay_t<decltype(value)>;
-    const char* kind = std::is_same<T, std::string>::value ? "S"
-                       : std::is_same<T, int>::value       ? "N"
-                                                           : "X";
-    table.add({optionName(key), kind, doc, pcl_movers::detail::formatValue(value)});
-  });
+        "\nParameters, by stage (--stage.name VALUE, or 'stage.name = value' in the config\n"
+        "file, where the snake_case key, ground.max_slope_deg, also works; switches take\n"
+        "1/0, true/false or on/off; the flat keys of earlier versions, --ground-distance,\n"
+        "are read with a warning):"}});
+  DetectorParameters().forEachParameter(
+      [&](const std::string& key, const auto& value, const char* doc) {
+        using T = std::decay_t<decltype(value)>;
+        const char* kind = std::is_same<T, std::string>::value ? "S"
+                           : std::is_same<T, int>::value       ? "N"
+                           : std::is_same<T, bool>::value      ? "0|1"
+                                                               : "X";
+        std::vector<std::string> legacy;
+        for (const auto& old : DetectorParameters::legacyKeys())
+          if (old.second == key) {
+            legacy.push_back(optionName(old.first));
+            legacy.push_back("--" + old.first);  // the snake_case spelling
+          }
+        table.add({optionName(key), kind, doc, pcl_movers::detail::formatValue(value), legacy});
+      });
   return table;
 }
 
@@ -1255,12 +1265,12 @@ int DetectRun::run() {
     print_info("Sequence ");
     print_value("%s", o_.seq.c_str());
     print_info(": %zu frames, poses: %s, mode: %s\n", reader_->size(), st_.pose_source.c_str(),
-               o_.params.mode.c_str());
+               o_.params.track.mode.c_str());
   } else {
     print_info(o_.live ? "Live sensor on " : "Capture ");
     print_value("%s", o_.inputName().c_str());
     print_info(": %s, poses: %s, mode: %s\n", st_.sensor.c_str(), st_.pose_source.c_str(),
-               o_.params.mode.c_str());
+               o_.params.track.mode.c_str());
   }
   started_ = last_report_ = std::chrono::steady_clock::now();
   try {

@@ -35,19 +35,13 @@ namespace {
 
 struct Options {
   // ground
-  pcl_movers::tools::GroundOptions ground;
-  bool local_slope = pcl_movers::GroundPlaneFilter<Point>().getLocalSlopeCheck();
-  float local_slope_deg =
-      pcl_movers::GroundPlaneFilter<Point>().getMaxLocalSlope() * 180.f / float(M_PI);
-  float range_noise = pcl_movers::GroundPlaneFilter<Point>().getRangeNoise();
-  float slope_band = pcl_movers::GroundPlaneFilter<Point>().getLocalSlopeBand();
+  pcl_movers::tools::StageOptions<pcl_movers::GroundParameters> ground =
+      pcl_movers::tools::groundOptions();
   bool per_frame = false;
   float baseline = 0.25f;
   // segmentation
-  float k = pcl_movers::RangeImageRegionGrowing<Point>().getDepthThresholdFactor();
-  float floor = pcl_movers::RangeImageRegionGrowing<Point>().getMinDepthThreshold();
-  int gap = pcl_movers::RangeImageRegionGrowing<Point>().getMaxGap();
-  float bridge = pcl_movers::RangeImageRegionGrowing<Point>().getBridgeLength();
+  pcl_movers::tools::StageOptions<pcl_movers::SegmentationParameters> segment =
+      pcl_movers::tools::segmentationOptions();
   // scoring
   int min_points = 30;
   float min_fraction = 0.8f;
@@ -72,23 +66,12 @@ pcl_movers::tools::OptionTable optionTable() {
         d.sensor},
        {"", "", "\nGround removal:"}});
   table.add(d.ground.options());
+  table.add({{"--baseline", "M",
+              "the height-threshold baseline calls z < -sensor_height + M ground", str(d.baseline)},
+             {"", "", "\nSegmentation:"}});
+  table.add(d.segment.options());
   table.add(
-      {{"--local-slope-deg", "D", "steepest rise to a column neighbour still ground",
-        str(d.local_slope_deg)},
-       {"--range-noise", "M", "height noise forgiven by the local-slope test", str(d.range_noise)},
-       {"--slope-band", "M",
-        "column neighbours further than M from their plane are ignored by\nthe local-slope test",
-        str(d.slope_band)},
-       {"--no-local-slope", "", "plane distance only (the local-slope test off)"},
-       {"--baseline", "M", "the height-threshold baseline calls z < -sensor_height + M ground",
-        str(d.baseline)},
-       {"", "", "\nSegmentation:"},
-       {"--k", "F", "depth threshold factor: neighbours join if |dr| <= F * range", str(d.k)},
-       {"--floor", "M", "absolute floor of the depth threshold", str(d.floor)},
-       {"--gap", "N", "empty cells bridged between neighbours", std::to_string(d.gap)},
-       {"--bridge", "M", "longest gap bridged along a row, past empty and nearer cells",
-        str(d.bridge)},
-       {"", "", "\nScoring:"},
+      {{"", "", "\nScoring:"},
        {"--min-points", "N", "smallest scored instance", std::to_string(d.min_points)},
        {"--min-fraction", "F", "share of an instance one cluster must hold", str(d.min_fraction)},
        {"--per-frame", "", "also print ground precision/recall of every frame"}});
@@ -223,11 +206,7 @@ void scoreFrame(const Frame& frame, const Options& opt, Result& result) {
   for (std::size_t i = 0; i < n; ++i) unplaced += !placed[i];
 
   auto configure = [&opt](pcl_movers::GroundPlaneFilter<Point>& f) {
-    opt.ground.applyTo(f);
-    f.setLocalSlopeCheck(opt.local_slope);
-    f.setMaxLocalSlope(opt.local_slope_deg * float(M_PI) / 180.f);
-    f.setRangeNoise(opt.range_noise);
-    f.setLocalSlopeBand(opt.slope_band);
+    f.setParameters(opt.ground.parameters);
     f.setNegative(true);
   };
   std::vector<std::uint8_t> is_ground(n, 0), is_baseline(n, 0);
@@ -253,7 +232,7 @@ void scoreFrame(const Frame& frame, const Options& opt, Result& result) {
     for (const auto i : ground)
       if (!placed[i]) is_ground[i] = 1;
   }
-  const float z0 = cloud->sensor_origin_.z() - opt.ground.sensor_height + opt.baseline;
+  const float z0 = cloud->sensor_origin_.z() - opt.ground.parameters.sensor_height + opt.baseline;
   for (std::size_t i = 0; i < n; ++i) is_baseline[i] = (*cloud)[i].z < z0;
   const auto truth = pcl_movers::eval::groundTruthFromLabels(labels);
   const auto frame_score = pcl_movers::eval::scoreGround(truth, is_ground);
@@ -285,10 +264,7 @@ void scoreFrame(const Frame& frame, const Options& opt, Result& result) {
       p.x = p.y = p.z = nan;
     }
   pcl_movers::RangeImageRegionGrowing<Point> rg;
-  rg.setDepthThresholdFactor(opt.k);
-  rg.setMinDepthThreshold(opt.floor);
-  rg.setMaxGap(opt.gap);
-  rg.setBridgeLength(opt.bridge);
+  rg.setParameters(opt.segment.parameters);
   rg.setWrapAround(pcl_movers::SensorModel::fromName(opt.sensor).isFullRevolution());
   rg.setInputCloud(image);
   std::vector<pcl::PointIndices> clusters;
@@ -350,19 +326,9 @@ int run(int argc, char** argv) {
   Options opt;
   std::string v;
   opt.ground.parse(args);
-  if (args.get("--local-slope-deg", v)) {
-    opt.local_slope_deg = nonNegative("--local-slope-deg", v);
-    if (opt.local_slope_deg >= 90) throw InputError("--local-slope-deg: must be below 90");
-  }
-  if (args.get("--range-noise", v)) opt.range_noise = nonNegative("--range-noise", v);
-  if (args.get("--slope-band", v)) opt.slope_band = nonNegative("--slope-band", v);
-  if (args.has("--no-local-slope")) opt.local_slope = false;
   if (args.has("--per-frame")) opt.per_frame = true;
   if (args.get("--baseline", v)) opt.baseline = parseNumber("--baseline", v);
-  if (args.get("--k", v)) opt.k = nonNegative("--k", v);
-  if (args.get("--floor", v)) opt.floor = nonNegative("--floor", v);
-  if (args.get("--gap", v)) opt.gap = integer("--gap", v, 0);
-  if (args.get("--bridge", v)) opt.bridge = nonNegative("--bridge", v);
+  opt.segment.parse(args);
   if (args.get("--min-points", v)) opt.min_points = integer("--min-points", v, 1);
   if (args.get("--min-fraction", v)) {
     opt.min_fraction = positive("--min-fraction", v);
@@ -396,19 +362,22 @@ int run(int argc, char** argv) {
   for (const auto& dir : opt.kitti) evaluate(dir, kittiFrames(dir, opt.first, opt.last));
   for (const auto& dir : opt.sequences) evaluate(dir, sequenceFrames(dir, opt.first, opt.last));
 
+  const pcl_movers::GroundParameters& g = opt.ground.parameters;
+  const pcl_movers::SegmentationParameters& sp = opt.segment.parameters;
   char slope_text[128] = "local-slope test off";
-  if (opt.local_slope)
+  if (g.local_slope)
     std::snprintf(slope_text, sizeof(slope_text),
-                  "local slope <= %.0f° with %g m noise, neighbour band %g m", opt.local_slope_deg,
-                  opt.range_noise, opt.slope_band);
+                  "local slope <= %.0f° with %g m noise, neighbour band %g m", g.local_slope_deg,
+                  g.range_noise, g.slope_band);
   std::printf(
       "Ground: GroundPlaneFilter on the range image (distance %g m, tilt %.1f°, %d sectors, %s) "
       "vs. a height threshold z < %g m. Objects: ground removed, RangeImageRegionGrowing (k = %g, "
-      "floor %g m, gap %d, row bridge %g m); instances with >= %d points, recovered = one cluster "
-      "holds >= %g %% "
-      "of them.\n\n",
-      opt.ground.distance, opt.ground.tilt_deg, opt.ground.sectors, slope_text,
-      -opt.ground.sensor_height + opt.baseline, opt.k, opt.floor, opt.gap, opt.bridge,
+      "floor %g m, gap %d, row bridge %g m, clusters of >= %d points); instances with >= %d "
+      "points, recovered = one cluster holds >= %g %% of them. These are the defaults of "
+      "GroundParameters and SegmentationParameters, which pcl_movers_ground, pcl_movers_segment "
+      "and pcl_movers_detect share.\n\n",
+      g.distance, g.max_slope_deg, g.sectors, slope_text, -g.sensor_height + opt.baseline,
+      sp.depth_ratio, sp.depth_min, sp.max_gap, sp.row_bridge, sp.min_cluster_points,
       opt.min_points, 100.0 * opt.min_fraction);
   std::printf(
       "| data | frames | ground precision | ground recall | baseline precision | baseline recall "

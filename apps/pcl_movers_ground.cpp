@@ -4,6 +4,8 @@
  */
 #include <pcl_movers/ground_plane_filter.h>
 #include <pcl_movers/io/sequence.h>
+#include <pcl_movers/range_image_organizer.h>
+#include <pcl_movers/sensor_model.h>
 
 #include <pcl/console/parse.h>
 #include <pcl/console/print.h>
@@ -16,6 +18,7 @@
 #include <cstring>
 #include <filesystem>
 #include <functional>
+#include <limits>
 
 #include "tool_utils.h"
 
@@ -27,7 +30,9 @@ using Cloud = pcl::PointCloud<Point>;
 namespace {
 
 struct Options {
-  pcl_movers::tools::GroundOptions ground;
+  pcl_movers::tools::StageOptions<pcl_movers::GroundParameters> ground =
+      pcl_movers::tools::groundOptions();
+  std::string sensor = "auto";
   std::string mode = "label";
   bool overwrite = false;
 };
@@ -35,6 +40,11 @@ struct Options {
 pcl_movers::tools::OptionTable optionTable() {
   const Options d;
   pcl_movers::tools::OptionTable table({{"--mode", "M", "label, nonground or ground", d.mode},
+                                        {"--sensor", "NAME",
+                                         "beam layout that organizes unorganized scans for the "
+                                         "local-slope test:\nauto (estimated), hdl64, hdl32, "
+                                         "vlp16, os1_64, ladar2d",
+                                         d.sensor},
                                         {"--overwrite", "", "replace existing output files"}});
   table.add(d.ground.options());
   return table;
@@ -51,7 +61,8 @@ void printHelp(const char* argv0) {
       "  folder that receives one NNNNNN.pcd per frame. Points are in the sensor frame (z up); "
       "the\n"
       "  PCD VIEWPOINT origin is taken as the sensor position. Organized and unorganized scans "
-      "work.\n\n"
+      "work:\n  unorganized ones are organized into a range image first (--sensor), as the "
+      "detector does,\n  so that the local-slope test has beam neighbours.\n\n"
       "Output (--mode):\n"
       "  label      (default) every input point in the input's order and layout, fields of the\n"
       "             input plus `label` (uint32): 1 = ground, 0 = not ground or invalid (NaN)\n"
@@ -66,42 +77,94 @@ using pcl_movers::tools::parseNumber;
 using pcl_movers::tools::readScanChecked;
 using pcl_movers::tools::writeAtomically;
 
-void processOne(const std::string& in, const std::string& out, const Options& opt,
-                std::size_t& selected_total, std::size_t& points_total, double& ms_total) {
-  const Cloud::Ptr cloud = readScanChecked(in);
-  // extract_removed_indices = true: keep-organized output needs them (PCL warns otherwise).
-  pcl_movers::GroundPlaneFilter<Point> filter(true);
-  opt.ground.applyTo(filter);
-  filter.setInputCloud(cloud);
-  pcl::PCLPointCloud2 blob;
-  const auto t0 = std::chrono::steady_clock::now();
-  if (opt.mode == "label") {
+/** 1 for the ground points of `cloud`. Unorganized scans are organized first, as MoverDetector
+ * does, so that the local-slope test has beam neighbours; the few points the range image has no
+ * cell for (a nearer return took it) keep the plane-distance test of a pass over the raw scan. */
+std::vector<std::uint8_t> groundOf(const Cloud::Ptr& cloud, const Options& opt) {
+  std::vector<std::uint8_t> is_ground(cloud->size(), 0);
+  auto groundIndices = [&](const Cloud::Ptr& input) {
+    pcl_movers::GroundPlaneFilter<Point> filter;
+    filter.setParameters(opt.ground.parameters);
+    filter.setInputCloud(input);
     filter.setNegative(true);
     pcl::Indices ground;
     filter.filter(ground);
-    ms_total +=
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    selected_total += ground.size();
-    std::vector<std::uint32_t> labels(cloud->size(), 0);
-    for (const auto i : ground) labels[i] = 1;
+    return ground;
+  };
+  if (cloud->isOrganized() || !opt.ground.parameters.local_slope) {
+    for (const auto i : groundIndices(cloud)) is_ground[i] = 1;
+    return is_ground;
+  }
+  pcl_movers::RangeImageOrganizer<Point> organizer;
+  if (opt.sensor != "auto") organizer.setSensorModel(pcl_movers::SensorModel::fromName(opt.sensor));
+  organizer.setInputCloud(cloud);
+  Cloud::Ptr image(new Cloud);
+  try {
+    organizer.organize(*image);
+  } catch (const InputError& e) {
+    if (opt.sensor != "auto") throw;
+    // Too few returns to estimate the beam layout: no beam neighbours to test slopes with.
+    pcl::console::print_warn("%s; the local-slope test is skipped for this scan\n", e.what());
+    for (const auto i : groundIndices(cloud)) is_ground[i] = 1;
+    return is_ground;
+  }
+  const std::vector<int>& cell = organizer.getCellOfPoint();
+  bool unplaced = false;
+  for (std::size_t i = 0; i < cloud->size(); ++i) unplaced = unplaced || cell[i] < 0;
+  if (unplaced)
+    for (const auto i : groundIndices(cloud)) is_ground[i] = 1;
+  const std::vector<int>& index_image = organizer.getIndexImage();
+  std::vector<std::uint8_t> image_ground(image->size(), 0);
+  for (const auto c : groundIndices(image)) image_ground[c] = 1;
+  for (std::size_t c = 0; c < image->size(); ++c)
+    if (index_image[c] >= 0) is_ground[index_image[c]] = image_ground[c];
+  return is_ground;
+}
+
+void processOne(const std::string& in, const std::string& out, const Options& opt,
+                std::size_t& selected_total, std::size_t& points_total, double& ms_total) {
+  const Cloud::Ptr cloud = readScanChecked(in);
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::vector<std::uint8_t> is_ground = groundOf(cloud, opt);
+  ms_total +=
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  points_total += cloud->size();
+  pcl::PCLPointCloud2 blob;
+  if (opt.mode == "label") {
+    std::vector<std::uint32_t> labels(is_ground.begin(), is_ground.end());
+    for (const auto g : is_ground) selected_total += g;
     labelledBlob(*cloud, labels, blob);
   } else {
-    filter.setNegative(opt.mode == "ground");
-    filter.setKeepOrganized(cloud->isOrganized());
+    // The selected points; organized input keeps its layout with NaN elsewhere.
+    const bool want_ground = opt.mode == "ground";
+    const float nan = std::numeric_limits<float>::quiet_NaN();
     Cloud result;
-    filter.filter(result);
-    ms_total +=
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    std::size_t finite = 0;
-    for (const auto& p : result) finite += std::isfinite(p.x);
-    selected_total += finite;
-    points_total += cloud->size();
+    result.header = cloud->header;
+    result.sensor_origin_ = cloud->sensor_origin_;
+    result.sensor_orientation_ = cloud->sensor_orientation_;
+    for (std::size_t i = 0; i < cloud->size(); ++i) {
+      const Point& p = (*cloud)[i];
+      const bool finite = std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+      const bool selected = finite && (is_ground[i] != 0) == want_ground;
+      if (selected) ++selected_total;
+      if (selected) {
+        result.push_back(p);
+      } else if (cloud->isOrganized()) {
+        Point q = p;
+        q.x = q.y = q.z = nan;
+        result.push_back(q);
+      }
+    }
+    if (cloud->isOrganized()) {
+      result.width = cloud->width;
+      result.height = cloud->height;
+      result.is_dense = false;
+    }
     writeAtomically(out, [&](pcl::PCDWriter& w, const std::string& path) {
       return w.writeBinary(path, result);
     });
     return;
   }
-  points_total += cloud->size();
   writeAtomically(out, [&](pcl::PCDWriter& w, const std::string& path) {
     return w.writeBinary(path, blob, cloud->sensor_origin_, cloud->sensor_orientation_);
   });
@@ -122,6 +185,10 @@ int run(int argc, char** argv) {
     opt.mode = v;
   }
   opt.ground.parse(args);
+  if (args.get("--sensor", v)) {
+    if (v != "auto") pcl_movers::SensorModel::fromName(v);  // throws InputError on a bad name
+    opt.sensor = v;
+  }
 
   const std::string& input = positional[0];
   const std::string& output = positional[1];

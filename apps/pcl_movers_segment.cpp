@@ -32,13 +32,12 @@ using Cloud = pcl::PointCloud<Point>;
 namespace {
 
 struct Options {
-  pcl_movers::tools::GroundOptions ground;
+  pcl_movers::tools::StageOptions<pcl_movers::GroundParameters> ground =
+      pcl_movers::tools::groundOptions();
+  pcl_movers::tools::StageOptions<pcl_movers::SegmentationParameters> segment =
+      pcl_movers::tools::segmentationOptions();
   bool keep_ground = false;
   std::string sensor = "hdl64";
-  float k = pcl_movers::RangeImageRegionGrowing<Point>().getDepthThresholdFactor();
-  float floor = pcl_movers::RangeImageRegionGrowing<Point>().getMinDepthThreshold();
-  int gap = pcl_movers::RangeImageRegionGrowing<Point>().getMaxGap();
-  int min_size = 10;
   int max_size = std::numeric_limits<int>::max();
   bool overwrite = false;
 };
@@ -46,19 +45,14 @@ struct Options {
 pcl_movers::tools::OptionTable optionTable() {
   const Options d;
   pcl_movers::tools::OptionTable table(
-      {{"--k", "F", "depth threshold factor", pcl_movers::tools::str(d.k)},
-       {"--floor", "M", "absolute floor of the depth threshold [m]",
-        pcl_movers::tools::str(d.floor)},
-       {"--gap", "N", "empty cells bridged between neighbours, 0 = strict 8-neighbours",
-        std::to_string(d.gap)},
-       {"--min-size", "N", "smallest cluster kept", std::to_string(d.min_size)},
-       {"--max-size", "N", "largest cluster kept", "no limit"},
+      {{"--max-size", "N", "largest cluster kept", "no limit"},
        {"--sensor", "NAME",
         "beam layout for unorganized scans, and whether azimuth wraps\naround (360-degree "
         "sensors): hdl64, hdl32, vlp16, os1_64, ladar2d",
         d.sensor},
        {"--keep-ground", "", "do not remove the ground first"},
        {"--overwrite", "", "replace existing output files"}});
+  table.add(d.segment.options());
   table.add(d.ground.options());
   return table;
 }
@@ -96,17 +90,8 @@ void processOne(const std::string& in, const std::string& out, const Options& op
   const Cloud::Ptr cloud = readScanChecked(in);
   const std::size_t n = cloud->size();
   const auto t0 = std::chrono::steady_clock::now();
-  std::vector<std::uint8_t> is_ground(n, 0);
-  if (!opt.keep_ground) {
-    pcl_movers::GroundPlaneFilter<Point> filter;
-    opt.ground.applyTo(filter);
-    filter.setInputCloud(cloud);
-    filter.setNegative(true);
-    pcl::Indices ground;
-    filter.filter(ground);
-    for (const auto i : ground) is_ground[i] = 1;
-  }
-  // The range image: organized input is used as is, unorganized input is organized.
+  // The range image: organized input is used as is, unorganized input is organized. The ground
+  // is removed on it, as MoverDetector does, so that the local-slope test has beam neighbours.
   Cloud::Ptr image(new Cloud);
   std::vector<int> index_image;
   const pcl_movers::SensorModel model = pcl_movers::SensorModel::fromName(opt.sensor);
@@ -122,6 +107,17 @@ void processOne(const std::string& in, const std::string& out, const Options& op
     organizer.organize(*image);
     index_image = organizer.getIndexImage();
   }
+  std::vector<std::uint8_t> is_ground(n, 0);
+  if (!opt.keep_ground) {
+    pcl_movers::GroundPlaneFilter<Point> filter;
+    filter.setParameters(opt.ground.parameters);
+    filter.setInputCloud(image);
+    filter.setNegative(true);
+    pcl::Indices ground;
+    filter.filter(ground);
+    for (const auto c : ground)
+      if (index_image[c] >= 0) is_ground[index_image[c]] = 1;
+  }
   const float nan = std::numeric_limits<float>::quiet_NaN();
   for (std::size_t c = 0; c < image->size(); ++c)
     if (index_image[c] < 0 || is_ground[index_image[c]]) {
@@ -129,10 +125,7 @@ void processOne(const std::string& in, const std::string& out, const Options& op
       p.x = p.y = p.z = nan;
     }
   pcl_movers::RangeImageRegionGrowing<Point> rg;
-  rg.setDepthThresholdFactor(opt.k);
-  rg.setMinDepthThreshold(opt.floor);
-  rg.setMaxGap(opt.gap);
-  rg.setMinClusterSize(opt.min_size);
+  rg.setParameters(opt.segment.parameters);
   rg.setMaxClusterSize(opt.max_size);
   rg.setWrapAround(wrap);
   rg.setInputCloud(image);
@@ -179,18 +172,10 @@ int run(int argc, char** argv) {
   opt.overwrite = args.has("--overwrite");
   opt.keep_ground = args.has("--keep-ground");
   std::string v;
-  if (args.get("--k", v)) {
-    opt.k = static_cast<float>(parseNumber("--k", v));
-    if (opt.k < 0) throw InputError("--k: must be >= 0, got '" + v + "'");
-  }
-  if (args.get("--floor", v)) {
-    opt.floor = static_cast<float>(parseNumber("--floor", v));
-    if (opt.floor < 0) throw InputError("--floor: must be >= 0, got '" + v + "'");
-  }
-  if (args.get("--gap", v)) opt.gap = parseCount("--gap", v, 0);
-  if (args.get("--min-size", v)) opt.min_size = parseCount("--min-size", v, 1);
+  opt.segment.parse(args);
   if (args.get("--max-size", v)) opt.max_size = parseCount("--max-size", v, 1);
-  if (opt.max_size < opt.min_size) throw InputError("--max-size must be >= --min-size");
+  if (opt.max_size < opt.segment.parameters.min_cluster_points)
+    throw InputError("--max-size must be >= --min-cluster-points");
   if (args.get("--sensor", v)) opt.sensor = v;
   pcl_movers::SensorModel::fromName(opt.sensor);  // throws InputError on an unknown name
   opt.ground.parse(args);

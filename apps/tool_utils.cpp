@@ -151,52 +151,6 @@ double parseNumber(const std::string& flag, const std::string& text) {
   return v;
 }
 
-GroundOptions::GroundOptions() {
-  const GroundPlaneFilter<pcl::PointXYZ> defaults;
-  distance = defaults.getDistanceThreshold();
-  tilt_deg = defaults.getMaxTilt() * 180.f / float(M_PI);
-  sensor_height = defaults.getSensorHeight();
-  sectors = defaults.getNumSectors();
-}
-
-std::vector<Option> GroundOptions::options() const {
-  return {
-      {"--distance", "M", "ground if within M metres of its cell's plane", str(distance)},
-      {"--tilt-deg", "D", "steepest plane taken for ground [deg]", str(tilt_deg, 3)},
-      {"--sensor-height", "M", "sensor height above the ground under it [m]", str(sensor_height)},
-      {"--sectors", "N", "azimuth sectors of the polar cells", std::to_string(sectors)}};
-}
-
-void GroundOptions::parse(const Arguments& args) {
-  std::string v;
-  if (args.get("--distance", v)) {
-    distance = static_cast<float>(parseNumber("--distance", v));
-    if (!(distance > 0)) throw InputError("--distance: must be > 0, got '" + v + "'");
-  }
-  if (args.get("--tilt-deg", v)) {
-    tilt_deg = static_cast<float>(parseNumber("--tilt-deg", v));
-    if (tilt_deg < 0 || tilt_deg >= 90)
-      throw InputError("--tilt-deg: must be in [0, 90), got '" + v + "'");
-  }
-  if (args.get("--sensor-height", v)) {
-    sensor_height = static_cast<float>(parseNumber("--sensor-height", v));
-    if (sensor_height < 0) throw InputError("--sensor-height: must be >= 0, got '" + v + "'");
-  }
-  if (args.get("--sectors", v)) {
-    const double s = parseNumber("--sectors", v);
-    if (s < 1 || s > 4096 || s != std::floor(s))
-      throw InputError("--sectors: expected an integer in 1..4096, got '" + v + "'");
-    sectors = static_cast<int>(s);
-  }
-}
-
-void GroundOptions::applyTo(GroundPlaneFilter<pcl::PointXYZI>& filter) const {
-  filter.setDistanceThreshold(distance);
-  filter.setMaxTilt(tilt_deg * float(M_PI) / 180.f);
-  filter.setSensorHeight(sensor_height);
-  filter.setNumSectors(sectors);
-}
-
 pcl::PointCloud<pcl::PointXYZI>::Ptr readScanChecked(const std::string& path) {
   auto cloud = pcl::make_shared<pcl::PointCloud<pcl::PointXYZI>>();
   io::readScan(path, *cloud);

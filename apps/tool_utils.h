@@ -6,6 +6,9 @@
 #pragma once
 
 #include <pcl_movers/common.h>
+#include <pcl_movers/ground_parameters.h>
+#include <pcl_movers/parameter_io.h>
+#include <pcl_movers/segmentation_parameters.h>
 
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/console/parse.h>
@@ -22,9 +25,6 @@
 #include <vector>
 
 namespace pcl_movers {
-template <typename PointT>
-class GroundPlaneFilter;
-
 namespace tools {
 
 /** \brief True when -h or --help is among the arguments. */
@@ -106,24 +106,60 @@ void labelledBlob(const pcl::PointCloud<pcl::PointXYZI>& cloud,
 void writeAtomically(const std::string& path,
                      const std::function<int(pcl::PCDWriter&, const std::string&)>& write);
 
-/** \brief The GroundPlaneFilter options shared by the tools that remove the ground
- * (pcl_movers_ground, pcl_movers_segment, pcl_movers_eval_segmentation): one parser, one help
- * text and defaults taken from the filter itself, so the three cannot drift apart. */
-struct GroundOptions {
-  float distance;       ///< --distance M: ground if within M of its cell's plane
-  float tilt_deg;       ///< --tilt-deg D: steepest plane taken for ground
-  float sensor_height;  ///< --sensor-height M: sensor above the ground under it
-  int sectors;          ///< --sectors N: azimuth sectors of the polar cells
+/** \brief The options of one stage's parameter struct (GroundParameters,
+ * SegmentationParameters) for a tool: `--kebab-name VALUE` for every setting, with the struct's
+ * own defaults and descriptions, so pcl_movers_ground, pcl_movers_segment,
+ * pcl_movers_eval_segmentation and the detector cannot drift apart. */
+template <typename Parameters>
+struct StageOptions {
+  Parameters parameters;  ///< the struct's defaults until parse()
+  /// Older spellings of an option (setting key -> option names), accepted with a warning.
+  std::map<std::string, std::vector<std::string>> aliases;
 
-  GroundOptions();  ///< the filter's defaults
-  /** \brief The options above, with these values as defaults, for a tool's OptionTable. */
-  std::vector<Option> options() const;
-  /** \brief Reads the options given; throws InputError naming the option. */
-  void parse(const Arguments& args);
-  /** \brief Sets these options on a filter (the tools work on PointXYZI; kept out of this
-   * header so the tools that do not remove ground need not parse the filter's templates). */
-  void applyTo(GroundPlaneFilter<pcl::PointXYZI>& filter) const;
+  /** \brief The options, with the current values as defaults, for a tool's OptionTable. */
+  std::vector<Option> options() const {
+    std::vector<Option> out;
+    Parameters copy = parameters;
+    copy.forEachParameter([&](const char* key, const auto& value, const char* doc) {
+      const auto alias = aliases.find(key);
+      out.push_back({detail::parameterName("--", key), valueName(value), doc,
+                     detail::formatValue(value),
+                     alias != aliases.end() ? alias->second : std::vector<std::string>{}});
+    });
+    return out;
+  }
+  /** \brief Reads the options given, then checks the ranges; throws InputError naming the
+   * option. */
+  void parse(const Arguments& args) {
+    parameters.forEachParameter([&](const char* key, auto& value, const char*) {
+      const std::string name = detail::parameterName("--", key);
+      std::string text;
+      if (args.get(name, text)) detail::parseValue(text, value, name, "option");
+    });
+    parameters.validate("--");
+  }
+
+ private:
+  static const char* valueName(double) { return "X"; }
+  static const char* valueName(int) { return "N"; }
+  static const char* valueName(bool) { return "0|1"; }
 };
+
+/** \brief The ground options of the tools that remove the ground; --tilt-deg is the older
+ * spelling of --max-slope-deg. */
+inline StageOptions<GroundParameters> groundOptions() {
+  return {GroundParameters(), {{"max_slope_deg", {"--tilt-deg"}}}};
+}
+/** \brief The segmentation options; --k, --floor, --gap, --bridge and --min-size are older
+ * spellings. */
+inline StageOptions<SegmentationParameters> segmentationOptions() {
+  return {SegmentationParameters(),
+          {{"depth_ratio", {"--k"}},
+           {"depth_min", {"--floor"}},
+           {"max_gap", {"--gap"}},
+           {"row_bridge", {"--bridge"}},
+           {"min_cluster_points", {"--min-size"}}}};
+}
 
 /** \brief Runs `body`, turns exceptions into a clear "[tool] error: ..." and exit code 1. */
 int runTool(const char* tool_name, const std::function<int()>& body);

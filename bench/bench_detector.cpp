@@ -72,7 +72,7 @@ void runSequence(benchmark::State& state, const std::string& mode) {
     return;
   }
   pcl_movers::DetectorParameters params;
-  params.mode = mode;
+  params.track.mode = mode;
   // Per frame, the fastest of kPasses runs of the whole sequence (the detector is deterministic:
   // every pass does the same work), as for the tracker benchmark: short interruptions by other
   // processes then do not count. (Slower periods of a shared host, which last longer than a

@@ -104,7 +104,7 @@ void runTracker(benchmark::State& state, const std::string& mode) {
     return;
   }
   pcl_movers::DetectorParameters params;
-  params.mode = mode;
+  params.track.mode = mode;
   const std::size_t n = in.frames.size();
   // Per frame: the fastest of the repetitions (the least disturbed by other processes).
   std::vector<double> cpu_ms(n, std::numeric_limits<double>::max()), registrations(n, 0);
@@ -112,12 +112,12 @@ void runTracker(benchmark::State& state, const std::string& mode) {
     pcl_movers::MoverTracker<PointT> tracker;
     tracker.setParameters(params);
     pcl_movers::FreeSpaceMap free_space;
-    free_space.setHistory(params.free_space_lag + 1);
-    free_space.setMargin(params.free_space_margin, params.free_space_margin_per_metre);
+    free_space.setHistory(params.free_space.lag + 1);
+    free_space.setMargin(params.free_space.margin, params.free_space.margin_per_metre);
     for (std::size_t i = 0; i < n; ++i) {
       const Frame& f = in.frames[i];
       state.PauseTiming();
-      if (params.free_space_lag > 0) {
+      if (params.free_space.lag > 0) {
         free_space.addScan(*f.organized, f.pose);
         tracker.setFreeSpaceMap(&free_space);
       }

@@ -61,7 +61,7 @@ print("| step | method | CPU ms / frame | quality on the same frames |")
 print("|---|---|---|---|")
 g = [("BM_Ground_GroundPlaneFilter", "pcl_movers::GroundPlaneFilter (local planes, polar cells, column local-slope test)"),
      ("BM_Ground_GroundPlaneFilter_PlaneOnly", "pcl_movers::GroundPlaneFilter, plane distance only (`setLocalSlopeCheck(false)`)"),
-     ("BM_Ground_DetectorSettings_Tracking0000", "pcl_movers::GroundPlaneFilter as MoverDetector runs it (0.25 m, 15°, plane distance only; kitti-tracking-0000-a frames 0-19, 64 x 2200)"),
+     ("BM_Ground_DetectorSettings_Tracking0000", "pcl_movers::GroundPlaneFilter with the defaults MoverDetector runs it with (kitti-tracking-0000-a frames 0-19, 64 x 2200)"),
      ("BM_Ground_SACSegmentation_ExtractIndices", "pcl::SACSegmentation (one global plane, RANSAC, 0.2 m) + pcl::ExtractIndices")]
 for key, label in g:
     b = rows.get(key)
@@ -69,7 +69,7 @@ for key, label in g:
         print(f"| ground | {label} | {fmt(ms(key))} | precision {b['precision_pct']:.1f} %, recall {b['recall_pct']:.1f} % |")
     elif b:
         print(f"| ground | {label} | {fmt(ms(key))} | (no labels for these frames) |")
-s = [("BM_Segment_RangeImageRegionGrowing", "pcl_movers::RangeImageRegionGrowing (k = 0.03, gap 2, row bridge 0.5 m)"),
+s = [("BM_Segment_RangeImageRegionGrowing", "pcl_movers::RangeImageRegionGrowing (SegmentationParameters defaults)"),
      ("BM_Segment_RangeImageRegionGrowing_NoBridge", "pcl_movers::RangeImageRegionGrowing, no row bridge (gap 2)"),
      ("BM_Segment_RangeImageRegionGrowing_NoGap", "pcl_movers::RangeImageRegionGrowing, strict 8-neighbours (gap 0, no bridge)"),
      ("BM_Segment_EuclideanClusterExtraction", "pcl::EuclideanClusterExtraction (0.5 m, kd-tree built per frame)"),

@@ -65,9 +65,9 @@ fi
 
 if [[ ${#args[@]} -gt 0 ]]; then
   echo
-  echo "Ground precision / recall trade-off of the local-slope test (default: 20°, 0.02 m range noise,"
-  echo "0.3 m neighbour band; the angle was chosen as steeper than drivable ground, not tuned on"
-  echo "these frames). Each cell: precision / recall."
+  echo "Ground precision / recall trade-off of the local-slope test (defaults, GroundParameters:"
+  echo "20°, 0.02 m range noise, 0.3 m neighbour band; the angle was chosen as steeper than drivable"
+  echo "ground, not tuned on these frames). Each cell: precision / recall."
   echo
   header="| setting |"
   rule="|---|"
@@ -78,7 +78,7 @@ if [[ ${#args[@]} -gt 0 ]]; then
   done
   echo "$header"
   echo "$rule"
-  for setting in "--no-local-slope" "--local-slope-deg 10" "--local-slope-deg 15" \
+  for setting in "--local-slope 0" "--local-slope-deg 10" "--local-slope-deg 15" \
     "--local-slope-deg 20" "--local-slope-deg 25" "--local-slope-deg 30" "--range-noise 0.03"; do
     # shellcheck disable=SC2086
     out=$("$eval_bin" "${args[@]}" $setting 2>/dev/null)
@@ -93,14 +93,15 @@ fi
 
 if [[ -f "$kitti/labels/000000.label" ]]; then
   echo
-  echo "Sensitivity on KITTI (frames 0-2) to the segmentation parameters (defaults: k = 0.03, gap 2,"
-  echo "row bridge 0.5 m)"
-  echo "and the ground distance threshold (default 0.1 m):"
+  echo "Sensitivity on KITTI (frames 0-2) to the segmentation parameters and the ground distance"
+  echo "threshold (defaults, shared with pcl_movers_detect: depth ratio 0.05, max gap 2, row bridge"
+  echo "0, ground distance 0.1 m, plane tilt 15°):"
   echo
   echo "| setting | ground precision | ground recall | recovered | not merged | over-segmented | merged |"
   echo "|---|---|---|---|---|---|---|"
-  for setting in "--k 0.02" "--k 0.05" "--gap 0" "--gap 3" "--bridge 0" "--bridge 0.3" "--bridge 1" \
-    "--distance 0.15" "--distance 0.2"; do
+  for setting in "--depth-ratio 0.03" "--depth-ratio 0.04" "--max-gap 0" "--max-gap 3" \
+    "--row-bridge 0.3" "--row-bridge 0.5" "--row-bridge 1" "--distance 0.15" "--distance 0.25" \
+    "--max-slope-deg 10"; do
     # shellcheck disable=SC2086
     out=$("$eval_bin" --kitti "$kitti" $setting 2>/dev/null)
     g=$(echo "$out" | grep '^| kitti' | sed -n 1p | awk -F'|' '{print $4 "|" $5}')

@@ -916,7 +916,7 @@ TEST_F(BadInputs, EvalSegmentation) {
                   Expect::kFail,
                   {"does_not_exist", "does not exist"}});
   rows.push_back({"bad --frames", "--frames abc", Expect::kFail, {"--frames"}});
-  rows.push_back({"negative --k", "--k -1", Expect::kFail, {"--k"}});
+  rows.push_back({"negative --depth-ratio", "--depth-ratio -1", Expect::kFail, {"--depth-ratio"}});
   check("eval_segmentation", rows);
 }
 

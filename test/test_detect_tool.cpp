@@ -180,7 +180,7 @@ TEST_F(DetectTool, InterruptThenResumeEqualsUninterruptedRun) {
 
   // Another run's folder (other parameters) is refused, and left as it was.
   r = detect({dir_ + "/seq", out, "--labelled-clouds", "--point-labels", "--resume",
-              "--mover_speed", "2.5"},
+              "--decision.speed", "2.5"},
              dir_);
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("different run"), std::string::npos) << r.err;

@@ -272,7 +272,7 @@ std::vector<bool> runTracker(pcl_movers::DetectorParameters params, bool use_map
   Tracker tracker;
   tracker.setParameters(params);
   pcl_movers::FreeSpaceMap map;
-  map.setHistory(std::max(params.free_space_lag, params.free_space_long_lag) + 1);
+  map.setHistory(std::max(params.free_space.lag, params.free_space.long_lag) + 1);
   if (use_map) tracker.setFreeSpaceMap(&map);
   std::vector<bool> mover;
   for (int f = 0; f < frames; ++f) {
@@ -315,7 +315,7 @@ TEST(FreeSpaceMap, TrackerRejectsStaticObjectWithSlidingCentroid) {
   // part ahead of a boundary that slides forward 0.3 m per frame, so the centroid — the
   // measurement in centroid mode — moves at 1.5 m/s: a biased measurement of a static object.
   pcl_movers::DetectorParameters params;
-  params.mode = "centroid";
+  params.track.mode = "centroid";
   auto scene = [](int f, Eigen::Vector2d& ego) {
     ego = Eigen::Vector2d(0.5 * f, 0);
     return std::vector<Box>{{{15, 5}, 10, 2, 1.6}};
@@ -338,7 +338,7 @@ TEST(FreeSpaceMap, TrackerConfirmsMoverThroughFreeSpace) {
   auto all = [](int, const Eigen::Vector3f&) { return true; };
   for (const std::string mode : {"registration", "centroid"}) {
     pcl_movers::DetectorParameters params;
-    params.mode = mode;
+    params.track.mode = mode;
     const auto mover = runTracker(params, true, 20, scene, all);
     const int first = firstTrue(mover);
     EXPECT_GE(first, 0) << mode;
@@ -362,7 +362,7 @@ TEST(FreeSpaceMap, FarWalkerApproachingIsConfirmedThroughTheLongLag) {
     auto all = [](int, const Eigen::Vector3f&) { return true; };
     for (const int long_lag : {15, 0}) {
       pcl_movers::DetectorParameters params;
-      params.free_space_long_lag = long_lag;
+      params.free_space.long_lag = long_lag;
       const auto mover = runTracker(params, true, 50, scene, all);
       SCOPED_TRACE("speed " + std::to_string(speed) + ", long lag " + std::to_string(long_lag));
       if (speed > 0 && long_lag > 0) {
@@ -392,7 +392,7 @@ TEST(FreeSpaceMap, FastMoverSeenFromTheFirstFrameIsConfirmedBeforeTheLagHasPasse
     SCOPED_TRACE("speed " + std::to_string(speed));
     if (speed > 0) {
       EXPECT_GE(first, 0);
-      EXPECT_LT(first, params.free_space_lag);
+      EXPECT_LT(first, params.free_space.lag);
     } else {
       EXPECT_EQ(first, -1);
     }
@@ -531,7 +531,7 @@ TEST(FreeSpaceMap, SlowWalkerBesideAWallBecomesAMoverAndAStandingOneDoesNot) {
       };
       auto all = [](int, const Eigen::Vector3f&) { return true; };
       pcl_movers::DetectorParameters params;
-      params.slow_window = window;
+      params.decision.slow_window = window;
       const auto mover = runTracker(params, true, 40, scene, all);
       SCOPED_TRACE("speed " + std::to_string(speed) + ", slow window " + std::to_string(window));
       if (speed > 0 && window > 0) {

@@ -2,9 +2,11 @@
  * SPDX-License-Identifier: BSD-3-Clause
  */
 #include <gtest/gtest.h>
+#include <pcl_movers/ground_plane_filter.h>
 #include <pcl_movers/io/ground_truth.h>
 #include <pcl_movers/io/sequence.h>
 #include <pcl_movers/mover_detector.h>
+#include <pcl_movers/range_image_region_growing.h>
 #include <pcl_movers/sim/lidar_simulator.h>
 #include <pcl_movers/sim/scenario.h>
 
@@ -276,22 +278,22 @@ TEST(MoverDetector, BlindFramesCoast) {
 TEST(MoverDetector, RejectsBadParameters) {
   Detector detector;
   auto params = pcl_movers::DetectorParameters();
-  params.mode = "magic";
+  params.track.mode = "magic";
   EXPECT_THROW(detector.setParameters(params), pcl_movers::InputError);
   params = pcl_movers::DetectorParameters();
-  params.mover_votes = params.mover_window + 1;
+  params.decision.votes = params.decision.window + 1;
   EXPECT_THROW(detector.setParameters(params), pcl_movers::InputError);
   params = pcl_movers::DetectorParameters();
-  params.row_bridge = -0.1;
+  params.segment.row_bridge = -0.1;
   EXPECT_THROW(detector.setParameters(params), pcl_movers::InputError);
-  params.row_bridge = 0.5;
+  params.segment.row_bridge = 0.5;
   EXPECT_NO_THROW(detector.setParameters(params));
 }
 
 TEST(DetectorParameters, ConfigRoundTripAndErrors) {
   pcl_movers::DetectorParameters p;
-  p.mover_speed = 2.5;
-  p.mode = "centroid";
+  p.decision.speed = 2.5;
+  p.track.mode = "centroid";
   const std::string path = std::string(PCL_MOVERS_BINARY_DIR) + "/test_detector_params.cfg";
   {
     std::ofstream f(path);
@@ -299,8 +301,8 @@ TEST(DetectorParameters, ConfigRoundTripAndErrors) {
   }
   pcl_movers::DetectorParameters q;
   q.readConfig(path);
-  EXPECT_DOUBLE_EQ(q.mover_speed, 2.5);
-  EXPECT_EQ(q.mode, "centroid");
+  EXPECT_DOUBLE_EQ(q.decision.speed, 2.5);
+  EXPECT_EQ(q.track.mode, "centroid");
   {
     std::ofstream f(path);
     f << "mover_speed = 1\nno_such_key = 3\n";
@@ -318,6 +320,73 @@ TEST(DetectorParameters, ConfigRoundTripAndErrors) {
   }
   EXPECT_THROW(q.readConfig(path), pcl_movers::InputError);
   std::filesystem::remove(path);
+}
+
+// Stage keys, the flat keys of earlier versions, switches.
+TEST(DetectorParameters, StageKeysLegacyKeysAndSwitches) {
+  pcl_movers::DetectorParameters p;
+  p.set("ground.distance", "0.2", "cli");
+  p.set("ground.max-slope-deg", "12", "cli");  // the command line's kebab spelling
+  p.set("mover_speed", "1.5", "cli");          // a flat key of earlier versions
+  p.set("ground_local_slope", "0", "cli");
+  p.set("decision.latch", "off", "cli");
+  EXPECT_DOUBLE_EQ(p.ground.distance, 0.2);
+  EXPECT_DOUBLE_EQ(p.ground.max_slope_deg, 12.0);
+  EXPECT_DOUBLE_EQ(p.decision.speed, 1.5);
+  EXPECT_FALSE(p.ground.local_slope);
+  EXPECT_FALSE(p.decision.latch);
+  EXPECT_EQ(pcl_movers::DetectorParameters::canonicalKey("free-space-lag"), "free_space.lag");
+  EXPECT_THROW(p.set("decision.latch", "2", "cli"), pcl_movers::InputError);
+  EXPECT_THROW(p.set("ground.distance_m", "1", "cli"), pcl_movers::InputError);
+  // Every legacy key names a current one.
+  const auto keys = p.keys();
+  for (const auto& legacy : pcl_movers::DetectorParameters::legacyKeys())
+    EXPECT_NE(std::find(keys.begin(), keys.end(), legacy.second), keys.end()) << legacy.first;
+  // The config round trip writes switches as true/false and reads them back.
+  const std::string config = p.toConfig();
+  EXPECT_NE(config.find("decision.latch = false"), std::string::npos);
+  EXPECT_NE(config.find("ground.local_slope = false"), std::string::npos);
+  // Range errors name the stage key.
+  p.ground.max_slope_deg = 95;
+  try {
+    p.validate();
+    FAIL() << "a 95 degree ground plane accepted";
+  } catch (const pcl_movers::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("ground.max_slope_deg"), std::string::npos) << e.what();
+  }
+}
+
+// One source of defaults per stage: the ground filter and the region growing start from the
+// structs the detector reads (the tools build their options from the same structs).
+TEST(DetectorParameters, StageClassesStartFromTheDetectorDefaults) {
+  const pcl_movers::DetectorParameters d;
+  const pcl_movers::GroundParameters g =
+      pcl_movers::GroundPlaneFilter<pcl::PointXYZI>().getParameters();
+  EXPECT_NEAR(g.distance, d.ground.distance, 1e-6);
+  EXPECT_NEAR(g.max_slope_deg, d.ground.max_slope_deg, 1e-4);
+  EXPECT_NEAR(g.sensor_height, d.ground.sensor_height, 1e-6);
+  EXPECT_EQ(g.sectors, d.ground.sectors);
+  EXPECT_EQ(g.local_slope, d.ground.local_slope);
+  EXPECT_NEAR(g.local_slope_deg, d.ground.local_slope_deg, 1e-4);
+  EXPECT_NEAR(g.range_noise, d.ground.range_noise, 1e-6);
+  EXPECT_NEAR(g.slope_band, d.ground.slope_band, 1e-6);
+  const pcl_movers::SegmentationParameters s =
+      pcl_movers::RangeImageRegionGrowing<pcl::PointXYZI>().getParameters();
+  EXPECT_NEAR(s.depth_ratio, d.segment.depth_ratio, 1e-6);
+  EXPECT_NEAR(s.depth_min, d.segment.depth_min, 1e-6);
+  EXPECT_EQ(s.max_gap, d.segment.max_gap);
+  EXPECT_NEAR(s.row_bridge, d.segment.row_bridge, 1e-6);
+  EXPECT_EQ(s.min_cluster_points, d.segment.min_cluster_points);
+  // setParameters() and getParameters() are inverse.
+  pcl_movers::GroundParameters other;
+  other.distance = 0.3;
+  other.max_slope_deg = 7;
+  other.local_slope = !other.local_slope;
+  pcl_movers::GroundPlaneFilter<pcl::PointXYZI> filter;
+  filter.setParameters(other);
+  EXPECT_NEAR(filter.getDistanceThreshold(), 0.3f, 1e-6);
+  EXPECT_NEAR(filter.getMaxTilt(), 7 * M_PI / 180, 1e-6);
+  EXPECT_EQ(filter.getParameters().local_slope, other.local_slope);
 }
 
 // The simulator's sample scene (ego at 5 m/s, an oncoming car, a braking van, a crossing person,

@@ -104,7 +104,7 @@ TEST(MoverTracker, ComputeFeaturesGivesOrientedBox) {
 TEST(MoverTracker, CrossingMoversKeepIdentities) {
   for (const std::string mode : {"registration", "centroid"}) {
     auto params = defaults();
-    params.mode = mode;
+    params.track.mode = mode;
     Tracker tracker;
     tracker.setParameters(params);
     std::set<int> ids_a, ids_b;
@@ -179,7 +179,7 @@ TEST(MoverTracker, OccludedMoverIsReacquired) {
 TEST(MoverTracker, StaticObjectsFromMovingEgoAreNeverMovers) {
   for (const double false_rate : {0.001, 0.05}) {
     auto params = defaults();
-    params.confirm_false_rate = false_rate;
+    params.decision.confirm_false_rate = false_rate;
     Tracker tracker;
     tracker.setParameters(params);
     int false_movers = 0;
@@ -208,7 +208,7 @@ TEST(MoverTracker, StaticObjectsFromMovingEgoAreNeverMovers) {
 // and tracks of vanished clutter are deleted.
 TEST(MoverTracker, TracksStayBoundedOverLongSequence) {
   auto params = defaults();
-  params.max_tracks = 60;
+  params.track.max_tracks = 60;
   Tracker tracker;
   tracker.setParameters(params);
   std::mt19937 rng(3);
@@ -232,7 +232,7 @@ TEST(MoverTracker, TracksStayBoundedOverLongSequence) {
 TEST(MoverTracker, SmallClustersAreNotTracked) {
   Tracker tracker;
   auto params = defaults();
-  params.min_cluster_points = 1000;
+  params.segment.min_cluster_points = 1000;
   tracker.setParameters(params);
   SceneBuilder scene;
   scene.addBox(Eigen::Vector3d(0, 0, 1.7), Eigen::Vector2d(10, 0), 0.0, 0.5, 0.5, 1.0);
@@ -337,7 +337,7 @@ TEST(MoverTracker, ConfidentNearestMatchSkipsFartherCandidates) {
   std::map<double, std::vector<int>> ids;
   for (const double stop : {0.8, 1.1}) {
     auto params = defaults();
-    params.registration_stop_similarity = stop;  // > 1: never stop (every gated pair)
+    params.registration.stop_similarity = stop;  // > 1: never stop (every gated pair)
     Tracker tracker;
     tracker.setParameters(params);
     const Eigen::Vector3d sensor(0, 0, 1.7);
@@ -389,8 +389,8 @@ TEST(MoverTracker, StaticTrackThatStartsMovingIsFollowed) {
   for (const bool paper : {false, true}) {
     auto params = defaults();
     if (paper) {
-      params.static_refresh_frames = 1;
-      params.registration_stop_similarity = 1.1;
+      params.track.static_refresh_frames = 1;
+      params.registration.stop_similarity = 1.1;
     }
     Tracker tracker;
     tracker.setParameters(params);
@@ -435,7 +435,7 @@ TEST(MoverTracker, StillTrackWithNeighboursBeyondClearanceIsNotRegistered) {
   for (const double spacing : {1.5, 0.6})
     for (const double clearance : {1.0, 2.0}) {
       auto params = defaults();
-      params.static_clearance = clearance;
+      params.track.static_clearance = clearance;
       Tracker tracker;
       tracker.setParameters(params);
       const Eigen::Vector3d sensor(0, 0, 1.7);
@@ -473,8 +473,8 @@ TEST(MoverTracker, CoastingStaticTrackSkipsClaimedClustersAndIsReacquired) {
   std::map<double, int> registrations_hidden;
   for (const double stop : {0.8, 1.1}) {
     auto params = defaults();
-    params.registration_stop_similarity = stop;  // > 1: no match counts as a claim
-    params.static_refresh_frames = 1;            // every live track registers every frame
+    params.registration.stop_similarity = stop;  // > 1: no match counts as a claim
+    params.track.static_refresh_frames = 1;      // every live track registers every frame
     Tracker tracker;
     tracker.setParameters(params);
     const Eigen::Vector3d sensor(0, 0, 1.7);
@@ -540,8 +540,9 @@ TEST(MoverTracker, FitVelocityUsesScatterOfPositions) {
 TEST(MoverTracker, FarPedestrianConfirmedFromPositionScatter) {
   for (const int from_fit : {1, 0}) {
     auto params = defaults();
-    params.fast_from_fit = from_fit;
-    params.confirm_false_rate = 0;  // the vote rule alone (early confirmation: its own tests)
+    params.decision.fast_from_fit = from_fit;
+    params.decision.confirm_false_rate =
+        0;  // the vote rule alone (early confirmation: its own tests)
     Tracker tracker;
     tracker.setParameters(params);
     const Eigen::Vector3d sensor(0, 0, 1.7);
@@ -571,7 +572,7 @@ TEST(MoverTracker, YoungTrackVelocityFromLineFit) {
   double error[2] = {0, 0};
   for (const int fit : {1, 0}) {
     auto params = defaults();
-    params.velocity_fit_init = fit;
+    params.track.velocity_fit_init = fit;
     Tracker tracker;
     tracker.setParameters(params);
     const Eigen::Vector3d sensor(0, 0, 1.7);
@@ -605,7 +606,7 @@ TEST(MoverTracker, CopyOwnsItsModels) {
   // this, the track born on it would inherit the lost mover's velocity (re-acquisition), lose it
   // again and churn, which has nothing to do with model ownership.
   auto params = defaults();
-  params.reacquire_velocity = 0;
+  params.track.reacquire_velocity = false;
   original.setParameters(params);
   reference.setParameters(params);
   for (int k = 0; k < 5; ++k) {
@@ -689,7 +690,7 @@ int firstMoverFrame(const pcl_movers::DetectorParameters& params, const Eigen::V
 // motion is determined by 3-4 positions, so they are confirmed before the M-of-N rule's 5th update.
 TEST(MoverTracker, WellMeasuredMoverConfirmsEarly) {
   auto slow = defaults();
-  slow.confirm_false_rate = 0;  // M-of-N rule only
+  slow.decision.confirm_false_rate = 0;  // M-of-N rule only
   const Eigen::Vector3d person(0.6, 0.6, 1.8), car(4.4, 1.8, 1.5);
   const Eigen::Vector2d walk(0, 1.4), drive(0, 10.0);
   // Measured: the pedestrian at the 4th update (5th/6th without the early rule), the car at the
@@ -707,7 +708,7 @@ TEST(MoverTracker, WellMeasuredMoverConfirmsEarly) {
 // they wait for the M-of-N rule (the child is confirmed early once the bound admits its points).
 TEST(MoverTracker, NoisyOrSparseMoverIsNotConfirmedEarly) {
   auto slow = defaults();
-  slow.confirm_false_rate = 0;
+  slow.decision.confirm_false_rate = 0;
   const Eigen::Vector3d person(0.6, 0.6, 1.8);
   const Eigen::Vector2d walk(0, 1.4);
   const int noisy = firstMoverFrame(defaults(), {10, -1}, walk, person, 0.08);
@@ -718,11 +719,11 @@ TEST(MoverTracker, NoisyOrSparseMoverIsNotConfirmedEarly) {
   int points = 0;
   const int vote_rule = firstMoverFrame(slow, far, walk, child, 0, &points);
   ASSERT_GE(vote_rule, 4);
-  ASSERT_GE(points, defaults().min_cluster_points);
+  ASSERT_GE(points, defaults().segment.min_cluster_points);
   auto sparse = defaults();
-  sparse.confirm_min_points = points + 1;
+  sparse.decision.confirm_min_points = points + 1;
   EXPECT_EQ(firstMoverFrame(sparse, far, walk, child, 0), vote_rule);
-  sparse.confirm_min_points = points;
+  sparse.decision.confirm_min_points = points;
   EXPECT_LT(firstMoverFrame(sparse, far, walk, child, 0), vote_rule);
 }
 
@@ -738,8 +739,8 @@ TEST(MoverTracker, AcceleratingTargetVelocityConverges) {
   double rms[3] = {0, 0, 0}, still[3] = {0, 0, 0}, final_error[3] = {0, 0, 0};
   for (const int mode : {kScatter, kRange, kUnconfident}) {
     auto params = defaults();
-    params.measurement_sigma_from_scatter = mode == kRange ? 0 : 1;
-    if (mode == kUnconfident) params.registration_stop_similarity = 1.1;  // no B reaches it
+    params.track.sigma_from_scatter = mode == kRange ? 0 : 1;
+    if (mode == kUnconfident) params.registration.stop_similarity = 1.1;  // no B reaches it
     Tracker tracker;
     tracker.setParameters(params);
     const Eigen::Vector3d sensor(0, 0, 1.7);
@@ -844,7 +845,7 @@ TEST(MoverTracker, FitAccelerationMatchesHandComputedQuadratic) {
 double emergingVelocityError(int reacquire, double shadow = 3.0, int frames = 30,
                              bool after_emerged = false) {
   auto params = defaults();
-  params.reacquire_velocity = reacquire;
+  params.track.reacquire_velocity = reacquire;
   Tracker tracker;
   tracker.setParameters(params);
   const Eigen::Vector3d sensor(0, 0, 1.7);
@@ -1003,7 +1004,7 @@ WalkerFrame walkersFrame(Tracker& tracker, double t, double va, double b0, doubl
 TEST(MoverTracker, MergedClusterOfPassingWalkersIsSplit) {
   for (const int enabled : {1, 0}) {
     auto params = defaults();
-    params.split_merged = enabled;
+    params.track.split_merged = enabled;
     Tracker tracker;
     tracker.setParameters(params);
     std::set<int> ids_a, ids_b;
@@ -1105,7 +1106,7 @@ struct TurnResult {
 };
 TurnResult turningVan(int turn_yaw_samples) {
   auto params = defaults();
-  params.turn_yaw_samples = turn_yaw_samples;
+  params.registration.turn_yaw_samples = turn_yaw_samples;
   Tracker tracker;
   tracker.setParameters(params);
   const Eigen::Vector3d sensor(0, 0, 1.7);
@@ -1216,7 +1217,7 @@ TEST(MoverTracker, WalkerSeenOnlyAboveAParkedCarIsAMoverThroughTheCarsFloor) {
   const Eigen::Vector3d sensor(0, 0, 1.7);
   for (const int variant : {0, 1, 2}) {  // floor given; no floor; rule off
     auto params = defaults();
-    if (variant == 2) params.standing_height_from_occluder = 0;
+    if (variant == 2) params.decision.standing_height_from_occluder = false;
     Tracker tracker;
     tracker.setParameters(params);
     int movers = 0;
@@ -1310,8 +1311,8 @@ TEST(MoverTracker, WalkerHiddenFromBelowNeedsEveryVoteOfAWindow) {
       if (track.id != r.track_id) continue;
       int votes = 0;
       for (const char f : track.fast) votes += f;
-      EXPECT_EQ(static_cast<int>(track.fast.size()), params.mover_window);
-      EXPECT_EQ(votes, params.mover_window) << "confirmed at frame " << k;
+      EXPECT_EQ(static_cast<int>(track.fast.size()), params.decision.window);
+      EXPECT_EQ(votes, params.decision.window) << "confirmed at frame " << k;
     }
   }
   EXPECT_GE(first, 0);

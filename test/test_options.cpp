@@ -6,6 +6,11 @@
  * SPDX-License-Identifier: BSD-3-Clause
  */
 #include <pcl_movers/detector_parameters.h>
+#include <pcl_movers/eval/segmentation_metrics.h>
+#include <pcl_movers/io/ground_truth.h>
+
+#include <pcl/io/pcd_io.h>
+#include <pcl/point_types.h>
 
 #include <gtest/gtest.h>
 
@@ -38,7 +43,7 @@ std::string kebab(std::string key) {
 /** The options a help text lists: "--name" at the start of an (indented) line. */
 std::set<std::string> helpOptions(const std::string& help) {
   std::set<std::string> options;
-  const std::regex line("(^|\n) {2,}(--[a-z0-9-]+)");
+  const std::regex line("(^|\n) {2,}(--[a-z0-9.-]+)");
   for (std::sregex_iterator it(help.begin(), help.end(), line, std::regex_constants::match_default),
        end;
        it != end; ++it)
@@ -51,21 +56,31 @@ std::set<std::string> helpOptions(const std::string& help) {
 
 TEST(Options, KebabCaseParameterIsAccepted) {
   SKIP_UNLESS_BUILT("detect");
-  const auto r = runTool("detect", {"--sensor-height", "1.91", "--max-gap", "3", "--print-config"});
+  const auto r = runTool(
+      "detect", {"--ground.sensor-height", "1.91", "--segment.max-gap", "3", "--print-config"});
   EXPECT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.out.find("sensor_height = 1.91"), std::string::npos) << r.out;
-  EXPECT_NE(r.out.find("max_gap = 3"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("ground.sensor_height = 1.91"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("segment.max_gap = 3"), std::string::npos) << r.out;
   EXPECT_EQ(r.err.find("deprecated"), std::string::npos) << r.err;
 }
 
 TEST(Options, OldSpellingIsAcceptedWithAWarning) {
   SKIP_UNLESS_BUILT("detect");
-  const auto r = runTool("detect", {"--sensor_height", "1.91", "--print-config"});
+  const auto r = runTool("detect", {"--ground.sensor_height", "1.91", "--print-config"});
   EXPECT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.out.find("sensor_height = 1.91"), std::string::npos) << r.out;
-  EXPECT_NE(r.err.find("warning: --sensor_height is deprecated, use --sensor-height"),
+  EXPECT_NE(r.out.find("ground.sensor_height = 1.91"), std::string::npos) << r.out;
+  EXPECT_NE(r.err.find("warning: --ground.sensor_height is deprecated, use --ground.sensor-height"),
             std::string::npos)
       << r.err;
+  // The flat keys of earlier versions, in both spellings.
+  for (const std::string flat : {"--sensor-height", "--sensor_height"}) {
+    const auto old = runTool("detect", {flat, "1.92", "--print-config"});
+    EXPECT_EQ(old.exit_code, 0) << old.err;
+    EXPECT_NE(old.out.find("ground.sensor_height = 1.92"), std::string::npos) << old.out;
+    EXPECT_NE(old.err.find("warning: " + flat + " is deprecated, use --ground.sensor-height"),
+              std::string::npos)
+        << old.err;
+  }
   // Renamed options of other tools: the old spelling still works, with the same warning.
   if (toolBuilt("eval")) {
     const auto e = runTool("eval", {"--dontcare", "x.txt", "-5"});
@@ -131,9 +146,9 @@ TEST(Options, DetectHelpListsEveryParameterWithItsDefault) {
   ASSERT_EQ(r.exit_code, 0);
   const std::string help = r.out + r.err;
   pcl_movers::DetectorParameters().forEachParameter(
-      [&](const char* key, const auto& value, const char*) {
+      [&](const std::string& key, const auto& value, const char*) {
         const std::regex line(
-            "\n +" + kebab(key) + " [A-Z]+ .*\\(default: " +
+            "\n +" + kebab(key) + " [A-Z0-9|]+ .*\\(default: " +
             std::regex_replace(pcl_movers::detail::formatValue(value), std::regex("[.+]"), "\\$&") +
             "\\)");
         EXPECT_TRUE(std::regex_search(help, line)) << kebab(key) << " with its default";
@@ -165,6 +180,32 @@ TEST(Options, UnwritableOutputIsNamed) {
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find(out), std::string::npos) << r.err;
   EXPECT_EQ(r.err.find("Error during open"), std::string::npos) << r.err;
+}
+
+// pcl_movers_ground with its own defaults gives what docs/evaluation.md reports for them: it
+// organizes a raw KITTI .bin scan into a range image, as the detector and the evaluation do, so the
+// local-slope test runs. Without that step it scored 93.3-94.8 % precision on these frames (the
+// plane test alone); the evaluation reports 97-98 % with the local-slope test.
+TEST(GroundTool, DefaultsOnARawKittiScanGiveTheEvaluatedPrecision) {
+  SKIP_UNLESS_BUILT("ground");
+  const fs::path kitti = fs::path(PCL_MOVERS_SHARED_DATA) / "kitti-odometry-00";
+  if (!fs::exists(kitti / "labels" / "000000.label"))
+    GTEST_SKIP() << "SemanticKITTI frames not found at " << kitti
+                 << " (set PCL_MOVERS_SHARED_DATA)";
+  TempDir dir;
+  const std::string out = (dir.path() / "000000.pcd").string();
+  const auto r = runTool("ground", {(kitti / "velodyne" / "000000.bin").string(), out});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  pcl::PointCloud<pcl::PointXYZL> labelled;
+  ASSERT_EQ(pcl::io::loadPCDFile(out, labelled), 0);
+  const auto truth = pcl_movers::eval::groundTruthFromLabels(
+      pcl_movers::io::readLabels((kitti / "labels" / "000000.label").string()));
+  ASSERT_EQ(truth.size(), labelled.size());
+  std::vector<std::uint8_t> is_ground(labelled.size());
+  for (std::size_t i = 0; i < labelled.size(); ++i) is_ground[i] = labelled[i].label == 1;
+  const auto score = pcl_movers::eval::scoreGround(truth, is_ground);
+  EXPECT_GT(score.precision(), 0.96);
+  EXPECT_GT(score.recall(), 0.90);
 }
 
 TEST(Options, DetectOnASingleScanSaysItTakesAFolder) {

@@ -344,6 +344,7 @@ TEST(RangeImageRegionGrowing, WorksForPointXYZI) {
   RangeImageRegionGrowing<pcl::PointXYZI> rg;
   rg.setInputCloud(cloud);
   rg.setWrapAround(false);
+  rg.setMinClusterSize(1);  // clusters of 6 and 2 points
   std::vector<pcl::PointIndices> clusters;
   rg.segment(clusters);
   ASSERT_EQ(clusters.size(), 2u);

@@ -4,24 +4,33 @@
 #pragma once
 
 #include <pcl_movers/common.h>
+#include <pcl_movers/ground_parameters.h>
+#include <pcl_movers/parameter_io.h>
+#include <pcl_movers/segmentation_parameters.h>
+#include <pcl_movers/tracker_parameters.h>
+
+#include <pcl/console/print.h>
 
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace pcl_movers {
 
-/** \brief Every tunable of the mover-detection pipeline, with its default, in one place.
+/** \brief Every setting of the mover-detection pipeline: one struct per stage, each with its
+ * defaults, read by the stage's class, its tool and the pipeline alike.
  *
  * MoverDetector and MoverTracker read it; `pcl_movers_detect -h` prints it (through
  * forEachParameter(), so the help can never drift from the defaults) and `--config FILE` /
- * `--<key> VALUE` set it. Keys are the member names.
+ * `--<key> VALUE` set it. Keys are `stage.member` (`ground.distance`, `track.gate_sigmas`);
+ * sensor and deskew, which concern the input, have none. The flat keys of earlier versions
+ * (`ground_distance`, `mover_speed`) are still read, see legacyKeys().
  */
 struct DetectorParameters {
-  // ------------------------------------------------------------------ organizer
   /// Beam layout used to organize unorganized scans: auto (estimated from the first scan with
   /// enough returns; a known preset's calibration when its beams are recognized, see
   /// SensorModel::recognize()), or a preset: hdl64, hdl32, vlp16, os1_64, ladar2d. Organized scans
@@ -36,277 +45,15 @@ struct DetectorParameters {
   /// alarms 0.03 -> 0.63 per frame; docs/reliability.md, "De-skewing").
   std::string deskew = "off";
 
-  // ------------------------------------------------------------------ ground removal
-  /// Height of the sensor above the ground [m] (KITTI: 1.73); seeds the innermost ground planes.
-  double sensor_height = 1.73;
-  /// Points closer than this to their cell's ground plane are ground [m].
-  double ground_distance = 0.25;
-  /// Largest slope of a ground plane [deg].
-  double ground_max_slope_deg = 15.0;
-  /// 1 = GroundPlaneFilter's column local-slope test (rejects rough low vegetation and wall bases
-  /// that lie within ground_distance of the plane; see docs/design.md), 0 = plane distance only.
-  int ground_local_slope = 0;
+  GroundParameters ground;              ///< ground.*: GroundPlaneFilter
+  SegmentationParameters segment;       ///< segment.*: RangeImageRegionGrowing
+  RegistrationParameters registration;  ///< registration.*: a cluster against a track's model
+  TrackParameters track;                ///< track.*: association, Kalman filter, lifecycle
+  DecisionParameters decision;          ///< decision.*: which tracks are movers
+  FreeSpaceParameters free_space;       ///< free_space.*: the free-space evidence
 
-  // ------------------------------------------------------------------ segmentation
-  /// Region growing joins range-image neighbours whose depth differs by less than
-  /// depth_ratio · range (the paper's d_T proportional to depth).
-  double depth_ratio = 0.05;
-  /// Lower bound on that depth threshold [m] (near objects).
-  double depth_min = 0.1;
-  /// Empty range-image cells bridged by region growing in each direction (0 = strict 8-neighbour).
-  int max_gap = 2;
-  /// Longest gap bridged along a range-image row past empty and nearer cells [m]
-  /// (RangeImageRegionGrowing::setBridgeLength; 0 = off). Off in the detector: 0.5 recovers more
-  /// SemanticKITTI objects (92.9 -> 96.5 %) but lowered the mean hit rate on simulated urban by
-  /// 1.6 points (a cyclist joined to its surroundings), and KITTI 0000 did not change.
-  double row_bridge = 0.0;
-  /// Clusters with fewer points are ignored (noise, too small to track). 8, two under the 10 box
-  /// points of a scored target (docs/design.md): the ground filter takes a far walker's feet, so a
-  /// 10-12-point pedestrian at 45-60 m left 8-10-point clusters, and at 10 its track was born or
-  /// lost every other frame (open pedestrian 5 confirmed 18 frames after it became visible, 7 at
-  /// 8).
-  int min_cluster_points = 8;
-  /// Clusters further than this from the sensor are ignored [m] (too sparse to register).
-  double max_range = 80.0;
-
-  // ------------------------------------------------------------------ registration / density
-  /// Density grid cell size in x/y [m] and in z [m], and grid size in cells: 29×29 like the paper,
-  /// but 3 slices of 0.94 m instead of 7 — the paper's own speed-up ("reducing vertical resolution
-  /// to three slices gave a good speedup while maintaining good robustness").
-  /// 0.3 m × 29 cells = 8.7 m: the grid must hold the longest mover (a 7-8 m truck); at 0.2 m
-  /// (5.8 m) a truck's model was truncated and its reference point slid (open truck velocity
-  /// error 1.05 → 0.29 m/s, other targets unchanged).
-  double density_resolution = 0.3;
-  double density_resolution_z = 0.94;
-  int density_cells_xy = 29;
-  int density_cells_z = 3;
-  /// Gaussian σ per metre of range and its lower bound [m]. 0.003: one HDL-64E azimuth step
-  /// (0.0029 rad at 2200 columns), the horizontal spacing of the samples, as the paper's σ
-  /// "proportional to the sampling density" asks. At 0.01 (before) a car at 80 m was blurred
-  /// over σ = 0.8 m, three times its sample spacing: velocity RMS open / urban / wooded 0.208 /
-  /// 0.326 / 0.245 m/s, now 0.129 / 0.298 / 0.155 (docs/design.md).
-  double sigma_per_metre = 0.003;
-  double min_sigma = 0.1;
-  /// Yaw layers of the registration (1 = translation only; the paper used 3-5).
-  int yaw_samples = 1;
-  /// Turning movers (registration mode): when a mover's candidate does not match its model
-  /// confidently (B < registration_stop_similarity), it is registered again with this many yaw
-  /// layers, turn_yaw_step_deg apart (1 = off); the turned match is taken when its B is higher
-  /// by more than turn_min_gain. The yaw found stays with the track (later views are turned by
-  /// it onto the model) and turns the track's velocity with the object's heading.
-  int turn_yaw_samples = 7;
-  double turn_yaw_step_deg = 5.0;
-  double turn_min_gain = 0.05;
-  /// A registered candidate is only an update when its Bhattacharyya similarity reaches this
-  /// (low B = occlusion or wrong object).
-  double min_similarity = 0.35;
-  /// Clusters are evenly subsampled to at most this many points for registration.
-  int max_registration_points = 100;
-  /// Search radius of the registration for a track seen only once, around its centroid shift [m].
-  double young_search_radius = 0.8;
-  /// Half-life of the accumulated object model [frames].
-  double model_half_life = 4.0;
-
-  // ------------------------------------------------------------------ tracker
-  /// Association mode: registration (the paper's) or centroid (the paper's "simplest approach").
-  std::string mode = "registration";
-  /// σ of the white-noise acceleration of the constant-velocity Kalman filter [m/s²].
-  double acceleration_noise = 3.0;
-  /// Hard acceleration limit: updates implying more are rejected [m/s²].
-  double acceleration_limit = 12.0;
-  /// σ of a registered position measurement [m].
-  double registration_sigma = 0.1;
-  /// σ of a centroid position measurement [m] (centroids move with the viewpoint).
-  double centroid_sigma = 0.3;
-  /// Position σ grows with range: σ = max(base σ, this · range) [m per m of range].
-  double measurement_sigma_per_metre = 0.01;
-  /// Reported velocity (registration mode): 1 = from a second filter on the registered positions
-  /// (the tracking filter keeps the range-scaled σ) whose σ, while the track is young (fewer
-  /// than manoeuvre_window registered positions) or manoeuvring (a quadratic through its last
-  /// manoeuvre_window registered positions has an acceleration above manoeuvre_sigmas times its
-  /// σ) and the registration is confident (B >= registration_stop_similarity), is the scatter of
-  /// the track's last positions about their line (at least registration_sigma), else the
-  /// range-scaled σ; 0 = the tracking filter's velocity.
-  int measurement_sigma_from_scatter = 1;
-  /// Registered positions of the manoeuvre test (see measurement_sigma_from_scatter).
-  int manoeuvre_window = 15;
-  /// Significance of the acceleration of the manoeuvre test [σ].
-  double manoeuvre_sigmas = 4.0;
-  /// Static tracks (slow, established, one still candidate) are registered every this many
-  /// frames only; 1 = every frame (the paper's).
-  int static_refresh_frames = 4;
-  /// Largest centroid shift [m] of such a candidate that counts as "still".
-  double static_shift = 0.15;
-  /// Such a track's nearest cluster is only taken unregistered when every other cluster's
-  /// centroid is farther than this from the track's last centroid [m] (2 = two gate margins, the
-  /// earlier rule: one cluster within 2 m). Closer neighbours (parked cars in a row, bushes) are
-  /// no ambiguity for a cluster that stayed within static_shift and kept its size.
-  double static_clearance = 1.0;
-  /// A track's gated candidates are registered nearest centroid first; once one reaches this
-  /// similarity the farther ones are skipped (cost control; > 1 registers them all, the paper's).
-  double registration_stop_similarity = 0.8;
-  /// Velocity σ of a newborn track [m/s] (its velocity is unknown).
-  double initial_velocity_sigma = 6.0;
-  /// Gate: Mahalanobis distance bound of candidate centroids (chi²(2) 99 % ≈ 3.03).
-  double gate_sigmas = 3.0;
-  /// Extra gate radius for centroid shifts from changing views [m].
-  double gate_margin = 1.0;
-  /// Largest gate radius [m].
-  double max_gate_radius = 4.0;
-  /// Frames a track may go without an update (occlusion) before it is deleted.
-  int max_missed_frames = 5;
-  /// Upper bound on the number of live tracks (new clusters are not tracked beyond it).
-  int max_tracks = 2000;
-  /// Only clusters up to this long [m] and tall [m] can be movers and are registered; larger
-  /// ones (buildings, walls, hedges) are tracked by centroid and always static.
-  double max_mover_length = 12.0;
-  double max_mover_height = 4.5;
-  /// Clusters lower than this are not movers [m] (kerbs, ground clutter). The tracker compares the
-  /// tallest view of a track (a van seen from straight behind can show a lower cluster).
-  double min_mover_height = 0.8;
-
-  // ------------------------------------------------------------------ mover decision
-  /// Speed above which a track counts as moving [m/s].
-  double mover_speed = 1.2;
-  /// A speed only counts as fast when it is also this many standard deviations above zero.
-  double mover_speed_sigmas = 2.0;
-  /// 1 = the speed vote of a registered update uses the least-squares line through the measured
-  /// positions of the window (σ from their scatter about it, at least registration_sigma); 0 =
-  /// the Kalman velocity and its covariance (σ from measurement_sigma_per_metre · range), which
-  /// centroid updates always use.
-  int fast_from_fit = 1;
-  /// 1 = at a track's third registered update its Kalman filter restarts from the least-squares
-  /// line through its three positions (see MoverTracker), and a track whose first views were
-  /// occluded (their positions slide while the object emerges) restarts again from the line
-  /// through its first three unoccluded views (urban velocity RMS 0.357 -> 0.326 m/s); 0 = the
-  /// filter runs on from birth.
-  int velocity_fit_init = 1;
-  /// A track is a mover when its speed exceeded mover_speed in mover_votes of its last
-  /// mover_window updates, it has at least mover_min_age updates, and the displacement of its
-  /// measurements over the window is consistent with that speed.
-  /// Sustained slow motion (0 = off): a track whose positions over the last slow_window seconds
-  /// lie on a line faster than slow_speed, significantly so (the F-test of confirm_false_rate, σ
-  /// from the scatter about the line, at least registration_sigma), counts as moving even below
-  /// mover_speed. A walker at 0.6 m/s covers 0.9 m in 1.5 s, while registration wobble of a parked
-  /// car does not lie on a line; the free-space (slowFreeSpaceEvidence()) and height tests still
-  /// apply. Tune split: 1.0 s 0.040 FA/frame, 1.5 s 66.6 % hit 0.033, 2.0 s 66.2 % 0.032.
-  double slow_window = 1.5;
-  double slow_speed = 0.4;
-  int mover_window = 5;
-  int mover_votes = 3;
-  int mover_min_age = 4;
-  /// Displacement check: net measured displacement over the window must be at least this
-  /// fraction of mover_speed × elapsed time.
-  double displacement_ratio = 0.6;
-  /// Free-space test (FreeSpaceMap): a mover must occupy space the scan free_space_lag frames ago
-  /// saw through, or have left space the current scan sees through (0 = test off). 5 frames at
-  /// 10 Hz: a target at mover_speed has moved 0.6 m, twice the near margin. In a sequence's first
-  /// frames, before that many earlier scans exist, the oldest one is tested.
-  int free_space_lag = 5;
-  /// A second, longer lag tried when the free_space_lag test fails (0 = off): a slow mover
-  /// approaching far away (a pedestrian walking towards the sensor at 50 m) moves less in
-  /// free_space_lag frames than the range-scaled margin (1.3 m at 50 m), so only an older scan
-  /// can have seen its space empty. Static objects give no evidence at any lag.
-  int free_space_long_lag = 15;
-  /// Fraction of the points the free_space_long_lag test needs: a mover has moved three times
-  /// further by then and is mostly seen through (urban walker at 50 m: 70-100 %), while the
-  /// spurious evidence of a static object (foliage gaps, a changed viewpoint) does not grow with
-  /// the lag (a KITTI bush: 32 %).
-  double free_space_long_min_fraction = 0.5;
-  /// Fraction of the tested points that must be seen through, and at least this many points.
-  double free_space_min_fraction = 0.2;
-  int free_space_min_points = 3;
-  /// Tests that must pass (among the last mover_window ones) before a track is confirmed. Tests run
-  /// on every fast update from a track's third update on, in parallel with the speed votes.
-  int free_space_votes = 2;
-  /// Seen through = the earlier range exceeds the point's distance by max(margin,
-  /// margin_per_metre · distance) [m, m/m] (range noise, pose error, beam footprint).
-  double free_space_margin = 0.3;
-  double free_space_margin_per_metre = 0.02;
-  /// 1 = a downward direction in which an earlier scan got no return at all counts as seen
-  /// empty up to max_range; 0 = such a direction is unknown. A downward ray passes every object
-  /// standing on the ground before it reaches the ground, and the sensors this is for return from
-  /// cars, people and foliage well beyond max_range (HDL-64E: 120 m), so a ray that returned
-  /// nothing passed the object's place while it was empty. Without this, an object entering the
-  /// scene at max_range has no evidence until it is free_space_lag frames inside, because the
-  /// space it fills was last seen by rays that reached past max_range (urban car 1 at 80 m:
-  /// confirmed 2 frames later). Upward rays are left unknown: their no-returns are sky seen past
-  /// porous canopy, which says nothing about the leaves the next scan hits in that direction
-  /// (wooded: 31-53 false alarms per 160 frames when they counted). Only where a beam was cast
-  /// (FreeSpaceMap: not between a sparse sensor's beams) and only for rays that stay above the
-  /// ground (sensor_height below) up to max_range: a steeper silent ray met something closer
-  /// than the sensor's minimum range, or its return dropped (tune split: 0.887 -> 0.049 false
-  /// alarms per frame, parked cars passed at 2 m).
-  int free_space_no_return = 1;
-  /// Early confirmation of well-measured motion (0 = off): a registered track whose measured
-  /// positions determine its velocity beyond doubt need not wait for mover_votes of mover_window
-  /// votes and mover_min_age updates. Its window's least-squares line (σ from the scatter of the
-  /// positions about it, at least confirm_sigma_floor) must be faster than mover_speed and pass an
-  /// F-test of "velocity = 0" at this false-positive rate: |v|² / (2 σ_v²) ≥ F(2, 2(n-2)) quantile,
-  /// i.e. |v| / σ_v ≥ 44.7 / 11.1 / 7.3 / 6.1 at 3 / 4 / 5 / 6 positions. The displacement and
-  /// height tests still apply, and confirm_free_space_votes free-space tests must have passed.
-  double confirm_false_rate = 0.001;
-  /// Lower bound on the position σ of that test [m]: registration errors are not only white noise
-  /// (the sub-cell fit's median error is ~0.02 m), so a line through 3-4 nearly collinear positions
-  /// is not credited with a vanishing σ.
-  double confirm_sigma_floor = 0.02;
-  /// Only tracks whose last update registered with at least this similarity and had at least this
-  /// many points are confirmed early (sparse or poorly matched views keep the M-of-N rule: their
-  /// registrations can jump between partial views consistently enough to look like a line; with
-  /// no B bound a simulated wooded shrub was confirmed). 0.8 is a confident match, as
-  /// registration_stop_similarity; 12 points keeps the 8-11-point clusters min_cluster_points
-  /// admits on the vote rule.
-  double confirm_min_similarity = 0.8;
-  int confirm_min_points = 12;
-  /// Free-space tests that must have passed for an early confirmation (free_space_votes otherwise).
-  int confirm_free_space_votes = 1;
-  /// Once confirmed, a track stays a mover while it is tracked (1) or is re-decided every update
-  /// (0).
-  int mover_latch = 1;
-  /// 1 = a confirmed mover whose gated candidate failed registration (low B) keeps that cluster
-  /// as its output row without an update, instead of the cluster starting a new track.
-  int hold_confirmed = 1;
-  /// 1 = a cluster whose lower part a nearer object hides (RangeImageRegionGrowing::
-  /// occluderFloors(): at least half its bottom cells have a nearer object right below) counts,
-  /// for the min_mover_height test, as reaching down to that object's lowest point: a walker seen
-  /// only above a parked car shows a 0.3 m head and shoulders; 0 = its visible extent.
-  int standing_height_from_occluder = 1;
-  /// Occlusion-aware measurements (0 = off): a cluster side (range image columns) counts as
-  /// occluded when at least this fraction of its boundary cells is bounded by a nearer object
-  /// point (RangeImageRegionGrowing::occludedSides()). The extent there is not the object's and
-  /// changes while it emerges or hides, so its registered position slides: the reported-velocity
-  /// filter skips such measurements (occluded_skip) or gives them the range-scaled σ, and early
-  /// confirmation waits for an unoccluded view. 0.45 of 0.3 / 0.45 / 0.6 tried: at 0.3 the KITTI
-  /// van and cyclist were flagged often enough to coast through real speed changes.
-  double occluded_fraction = 0.45;
-  /// Registered updates of occluded views the reported-velocity filter skips in a row while the
-  /// track's velocity is known (from mover_min_age unoccluded views, or inherited on
-  /// re-acquisition); later ones are taken with the range-scaled σ. The first update after a
-  /// skipped run moves the filter's position to the measurement and keeps its velocity (and
-  /// that velocity's σ from before the run): the slide has moved the reference point on the
-  /// object, an offset that must not become a velocity. 0 = never skip.
-  int occluded_skip = 10;
-  /// Merged clusters (0 = off; registration mode): a cluster claimed by two or more established
-  /// tracks (each with at least 4 of its points within split_claim_distance of the track's last
-  /// view moved by its prediction), one a confirmed mover and the others confirmed or static,
-  /// whose position lines differ by at least split_min_speed_difference and gate_sigmas times
-  /// their σ is split between them (MoverTracker::splitMergedClusters()): two urban walkers
-  /// passing each other were one cluster for 7 frames, one track carried the merged view with a
-  /// velocity 0.5 m/s off and the other track died. Fragments of one object move alike and stay
-  /// merged. Split parts count as occluded (their shared side is not the object's extent).
-  int split_merged = 1;
-  double split_claim_distance = 0.4;
-  double split_min_speed_difference = 1.0;
-  /// Re-acquisition after occlusion (0 = off; registration mode): a track born on a cluster near
-  /// the predicted extent of a mover lost in the last frames (coasting) starts with that mover's
-  /// velocity (σ `reacquire_velocity_sigma` [m/s]) instead of zero, and skips the line-fit restart
-  /// of velocity_fit_init: its first positions slide while the object emerges from behind the
-  /// occluder that hid it. An occluded cluster also inherits from a confirmed mover that is still
-  /// tracked and moving (the front of a car emerging past a trunk while its track keeps the rear).
-  int reacquire_velocity = 1;
-  double reacquire_velocity_sigma = 1.0;
-
-  /** \brief Calls `f(key, member, description)` for every parameter (double, int or string). */
+  /** \brief Calls `f(key, member, description)` for every parameter (double, int, bool or
+   * string), with `key` a std::string "stage.member". */
   template <typename F>
   void forEachParameter(F&& f);
   template <typename F>
@@ -314,8 +61,8 @@ struct DetectorParameters {
     const_cast<DetectorParameters*>(this)->forEachParameter(f);
   }
 
-  /** \brief Sets `key` (snake_case, or kebab-case: sensor-height) from text; throws
-   * InputError("where: ...") for an unknown key or a value that is not a valid number. */
+  /** \brief Sets `key` (`stage.member`; '-' for '_' also works; a legacy flat key is mapped)
+   * from text; throws InputError("where: ...") for an unknown key or an invalid value. */
   void set(const std::string& key, const std::string& value, const std::string& where);
   /** \brief Reads `key = value` lines ('#' comments and blank lines allowed); unknown keys and
    * malformed lines throw InputError with file:line. */
@@ -328,176 +75,138 @@ struct DetectorParameters {
   std::string toConfig() const;
   /** \brief A JSON object with every parameter. */
   std::string toJson() const;
+  /** \brief The flat keys of earlier versions and the key each is now (ground_distance ->
+   * ground.distance), for configs and command lines written before the stages had structs. */
+  static const std::vector<std::pair<std::string, std::string>>& legacyKeys();
+  /** \brief The current key of `key` (snake_case): itself, or what legacyKeys() maps it to. */
+  static std::string canonicalKey(const std::string& key);
 };
 
 // --------------------------------------------------------------------------- implementation
-template <typename F>
-void DetectorParameters::forEachParameter(F&& f) {
-  f("sensor", sensor, "layout of unorganized scans: auto, hdl64, hdl32, vlp16, os1_64, ladar2d");
-  f("deskew", deskew, "per-point-time de-skewing with the ego motion: auto, on, off");
-  f("sensor_height", sensor_height, "sensor height above the ground [m]");
-  f("ground_distance", ground_distance, "max distance of ground points from their plane [m]");
-  f("ground_max_slope_deg", ground_max_slope_deg, "max ground slope [deg]");
-  f("ground_local_slope", ground_local_slope, "1 = column local-slope test on the ground");
-  f("depth_ratio", depth_ratio, "region growing depth threshold d_T / range");
-  f("depth_min", depth_min, "lower bound of d_T [m]");
-  f("max_gap", max_gap, "empty range-image cells bridged by region growing");
-  f("row_bridge", row_bridge, "gap bridged along a row past empty and nearer cells [m], 0 = off");
-  f("min_cluster_points", min_cluster_points, "clusters with fewer points are ignored");
-  f("max_range", max_range, "clusters further than this are ignored [m]");
-  f("density_resolution", density_resolution, "density grid cell size in x/y [m]");
-  f("density_resolution_z", density_resolution_z, "density grid cell size in z [m]");
-  f("density_cells_xy", density_cells_xy, "density grid cells in x and y");
-  f("density_cells_z", density_cells_z, "density grid cells in z");
-  f("sigma_per_metre", sigma_per_metre, "Gaussian sigma per metre of range");
-  f("min_sigma", min_sigma, "lower bound of the Gaussian sigma [m]");
-  f("yaw_samples", yaw_samples, "yaw layers of the registration (1 = translation only)");
-  f("turn_yaw_samples", turn_yaw_samples,
-    "yaw layers of a mover's second registration when the first fails (1 = off)");
-  f("turn_yaw_step_deg", turn_yaw_step_deg, "step between those yaw layers [deg]");
-  f("turn_min_gain", turn_min_gain, "B gain a turned match needs over the unturned one");
-  f("min_similarity", min_similarity, "min Bhattacharyya similarity of an update");
-  f("max_registration_points", max_registration_points, "subsample clusters to this many points");
-  f("young_search_radius", young_search_radius, "search radius for tracks seen once [m]");
-  f("model_half_life", model_half_life, "half-life of the accumulated model [frames]");
-  f("mode", mode, "association: registration or centroid");
-  f("acceleration_noise", acceleration_noise, "Kalman white-noise acceleration sigma [m/s^2]");
-  f("acceleration_limit", acceleration_limit,
-    "updates implying more acceleration are rejected [m/s^2]");
-  f("registration_sigma", registration_sigma, "sigma of a registered position [m]");
-  f("centroid_sigma", centroid_sigma, "sigma of a centroid position [m]");
-  f("measurement_sigma_per_metre", measurement_sigma_per_metre,
-    "position sigma per metre of range");
-  f("measurement_sigma_from_scatter", measurement_sigma_from_scatter,
-    "1 = reported velocity from a filter with sigma from the track's scatter");
-  f("manoeuvre_window", manoeuvre_window, "registered positions of the manoeuvre test");
-  f("manoeuvre_sigmas", manoeuvre_sigmas, "manoeuvre: acceleration significance [sigma]");
-  f("static_refresh_frames", static_refresh_frames, "register still static tracks every N frames");
-  f("static_shift", static_shift, "max centroid shift of a still static track [m]");
-  f("static_clearance", static_clearance,
-    "other clusters this close make a still static track register [m]");
-  f("registration_stop_similarity", registration_stop_similarity,
-    "skip farther candidates of a track after a registration this good");
-  f("initial_velocity_sigma", initial_velocity_sigma, "velocity sigma of a new track [m/s]");
-  f("gate_sigmas", gate_sigmas, "gate: Mahalanobis bound");
-  f("gate_margin", gate_margin, "gate: extra radius for centroid shifts [m]");
-  f("max_gate_radius", max_gate_radius, "gate: largest radius [m]");
-  f("max_missed_frames", max_missed_frames, "frames a track coasts before deletion");
-  f("max_tracks", max_tracks, "cap on live tracks");
-  f("max_mover_length", max_mover_length, "longer clusters are static, tracked by centroid [m]");
-  f("max_mover_height", max_mover_height, "taller clusters are static, tracked by centroid [m]");
-  f("min_mover_height", min_mover_height, "lower clusters are never movers [m]");
-  f("mover_speed", mover_speed, "speed threshold of a mover [m/s]");
-  f("mover_speed_sigmas", mover_speed_sigmas, "fast only if speed > this * its sigma");
-  f("fast_from_fit", fast_from_fit,
-    "1 = speed votes from a line fit of the measured positions, 0 = Kalman velocity");
-  f("velocity_fit_init", velocity_fit_init,
-    "1 = restart the Kalman filter from a line fit at the 3rd registered update");
-  f("slow_window", slow_window, "window of the sustained-slow-motion test [s] (0 = off)");
-  f("slow_speed", slow_speed, "min speed of sustained slow motion [m/s]");
-  f("mover_window", mover_window, "mover decision window N [updates]");
-  f("mover_votes", mover_votes, "fast updates M of the last N needed");
-  f("mover_min_age", mover_min_age, "min updates of a mover track K");
-  f("displacement_ratio", displacement_ratio, "min net displacement / (mover_speed * time)");
-  f("free_space_lag", free_space_lag,
-    "free-space test against the scan this many frames ago (0 = off)");
-  f("free_space_long_lag", free_space_long_lag,
-    "longer lag tried when the free_space_lag test fails [frames] (0 = off)");
-  f("free_space_long_min_fraction", free_space_long_min_fraction,
-    "min fraction seen through at free_space_long_lag");
-  f("free_space_min_fraction", free_space_min_fraction, "min fraction of points seen through");
-  f("free_space_min_points", free_space_min_points, "min number of points seen through");
-  f("free_space_votes", free_space_votes, "passed free-space tests needed to confirm");
-  f("free_space_margin", free_space_margin, "seen-through range margin [m]");
-  f("free_space_margin_per_metre", free_space_margin_per_metre, "margin per metre of distance");
-  f("free_space_no_return", free_space_no_return,
-    "1 = no return below the sensor in an earlier scan = seen empty up to max_range");
-  f("confirm_false_rate", confirm_false_rate,
-    "early confirmation: F-test false-positive rate of velocity = 0 (0 = off)");
-  f("confirm_sigma_floor", confirm_sigma_floor, "early confirmation: min position sigma [m]");
-  f("confirm_min_similarity", confirm_min_similarity, "early confirmation: min B of the update");
-  f("confirm_min_points", confirm_min_points, "early confirmation: min points of the cluster");
-  f("confirm_free_space_votes", confirm_free_space_votes,
-    "early confirmation: passed free-space tests needed");
-  f("standing_height_from_occluder", standing_height_from_occluder,
-    "1 = a cluster hidden from below by a nearer object is measured down to it for "
-    "min_mover_height");
-  f("mover_latch", mover_latch, "1 = a confirmed mover stays a mover while tracked");
-  f("hold_confirmed", hold_confirmed, "1 = confirmed movers keep low-B clusters (no update)");
-  f("occluded_fraction", occluded_fraction,
-    "min fraction of a cluster side's boundary next to a nearer object to call it occluded "
-    "(0 = off)");
-  f("occluded_skip", occluded_skip,
-    "occluded registered updates in a row the reported velocity coasts through");
-  f("split_merged", split_merged, "1 = split clusters claimed by tracks that move differently");
-  f("split_claim_distance", split_claim_distance,
-    "max distance of a claimed point from the track's predicted view [m]");
-  f("split_min_speed_difference", split_min_speed_difference,
-    "min velocity difference of tracks whose shared cluster is split [m/s]");
-  f("reacquire_velocity", reacquire_velocity,
-    "1 = a track born where a coasting mover is predicted starts with its velocity");
-  f("reacquire_velocity_sigma", reacquire_velocity_sigma,
-    "velocity sigma of such a re-acquired track [m/s]");
-}
-
 namespace detail {
-inline std::string trim(const std::string& s) {
-  const auto b = s.find_first_not_of(" \t\r\n");
-  if (b == std::string::npos) return "";
-  const auto e = s.find_last_not_of(" \t\r\n");
-  return s.substr(b, e - b + 1);
-}
-inline void parseValue(const std::string& text, double& v, const std::string& key,
-                       const std::string& where) {
-  char* end = nullptr;
-  const double d = std::strtod(text.c_str(), &end);
-  if (text.empty() || end == text.c_str() || *end != '\0' || !std::isfinite(d))
-    throw InputError(where + ": " + key + ": '" + text + "' is not a finite number");
-  v = d;
-}
-inline void parseValue(const std::string& text, int& v, const std::string& key,
-                       const std::string& where) {
-  char* end = nullptr;
-  const long l = std::strtol(text.c_str(), &end, 10);
-  if (text.empty() || end == text.c_str() || *end != '\0' || l < -1000000000L || l > 1000000000L)
-    throw InputError(where + ": " + key + ": '" + text + "' is not an integer");
-  v = static_cast<int>(l);
-}
-inline void parseValue(const std::string& text, std::string& v, const std::string& key,
-                       const std::string& where) {
-  if (text.empty()) throw InputError(where + ": " + key + ": empty value");
-  v = text;
-}
-inline std::string formatValue(double v) {
-  std::ostringstream os;
-  os << v;
-  return os.str();
-}
-inline std::string formatValue(int v) {
-  return std::to_string(v);
-}
-inline std::string formatValue(const std::string& v) {
-  return v;
-}
-inline std::string jsonValue(double v) {
-  return formatValue(v);
-}
-inline std::string jsonValue(int v) {
-  return formatValue(v);
-}
-inline std::string jsonValue(const std::string& v) {
-  return "\"" + v + "\"";
+/** \brief Calls `f("prefix.key", member, doc)` for every setting of one stage's struct. */
+template <typename Stage, typename F>
+void forEachStageParameter(const char* prefix, Stage& stage, F& f) {
+  stage.forEachParameter([&](const char* key, auto& member, const char* doc) {
+    f(std::string(prefix) + "." + key, member, doc);
+  });
 }
 }  // namespace detail
 
-inline void DetectorParameters::set(const std::string& key, const std::string& value,
-                                    const std::string& where) {
-  std::string snake = key;  // the command line's spelling, sensor-height, is accepted too
+template <typename F>
+void DetectorParameters::forEachParameter(F&& f) {
+  f(std::string("sensor"), sensor,
+    "layout of unorganized scans: auto, hdl64, hdl32, vlp16, os1_64, ladar2d");
+  f(std::string("deskew"), deskew, "per-point-time de-skewing with the ego motion: auto, on, off");
+  detail::forEachStageParameter("ground", ground, f);
+  detail::forEachStageParameter("segment", segment, f);
+  detail::forEachStageParameter("registration", registration, f);
+  detail::forEachStageParameter("track", track, f);
+  detail::forEachStageParameter("decision", decision, f);
+  detail::forEachStageParameter("free_space", free_space, f);
+}
+
+inline const std::vector<std::pair<std::string, std::string>>& DetectorParameters::legacyKeys() {
+  static const std::vector<std::pair<std::string, std::string>> keys{
+      {"sensor_height", "ground.sensor_height"},
+      {"ground_distance", "ground.distance"},
+      {"ground_max_slope_deg", "ground.max_slope_deg"},
+      {"ground_local_slope", "ground.local_slope"},
+      {"depth_ratio", "segment.depth_ratio"},
+      {"depth_min", "segment.depth_min"},
+      {"max_gap", "segment.max_gap"},
+      {"row_bridge", "segment.row_bridge"},
+      {"min_cluster_points", "segment.min_cluster_points"},
+      {"max_range", "track.max_range"},
+      {"density_resolution", "registration.resolution"},
+      {"density_resolution_z", "registration.resolution_z"},
+      {"density_cells_xy", "registration.cells_xy"},
+      {"density_cells_z", "registration.cells_z"},
+      {"sigma_per_metre", "registration.sigma_per_metre"},
+      {"min_sigma", "registration.min_sigma"},
+      {"yaw_samples", "registration.yaw_samples"},
+      {"turn_yaw_samples", "registration.turn_yaw_samples"},
+      {"turn_yaw_step_deg", "registration.turn_yaw_step_deg"},
+      {"turn_min_gain", "registration.turn_min_gain"},
+      {"min_similarity", "registration.min_similarity"},
+      {"max_registration_points", "registration.max_points"},
+      {"young_search_radius", "registration.young_search_radius"},
+      {"model_half_life", "registration.model_half_life"},
+      {"registration_stop_similarity", "registration.stop_similarity"},
+      {"mode", "track.mode"},
+      {"acceleration_noise", "track.acceleration_noise"},
+      {"acceleration_limit", "track.acceleration_limit"},
+      {"registration_sigma", "track.registration_sigma"},
+      {"centroid_sigma", "track.centroid_sigma"},
+      {"measurement_sigma_per_metre", "track.measurement_sigma_per_metre"},
+      {"measurement_sigma_from_scatter", "track.sigma_from_scatter"},
+      {"manoeuvre_window", "track.manoeuvre_window"},
+      {"manoeuvre_sigmas", "track.manoeuvre_sigmas"},
+      {"static_refresh_frames", "track.static_refresh_frames"},
+      {"static_shift", "track.static_shift"},
+      {"static_clearance", "track.static_clearance"},
+      {"initial_velocity_sigma", "track.initial_velocity_sigma"},
+      {"gate_sigmas", "track.gate_sigmas"},
+      {"gate_margin", "track.gate_margin"},
+      {"max_gate_radius", "track.max_gate_radius"},
+      {"max_missed_frames", "track.max_missed_frames"},
+      {"max_tracks", "track.max_tracks"},
+      {"velocity_fit_init", "track.velocity_fit_init"},
+      {"occluded_fraction", "track.occluded_fraction"},
+      {"occluded_skip", "track.occluded_skip"},
+      {"split_merged", "track.split_merged"},
+      {"split_claim_distance", "track.split_claim_distance"},
+      {"split_min_speed_difference", "track.split_min_speed_difference"},
+      {"reacquire_velocity", "track.reacquire_velocity"},
+      {"reacquire_velocity_sigma", "track.reacquire_velocity_sigma"},
+      {"hold_confirmed", "track.hold_confirmed"},
+      {"max_mover_length", "decision.max_length"},
+      {"max_mover_height", "decision.max_height"},
+      {"min_mover_height", "decision.min_height"},
+      {"mover_speed", "decision.speed"},
+      {"mover_speed_sigmas", "decision.speed_sigmas"},
+      {"fast_from_fit", "decision.fast_from_fit"},
+      {"slow_window", "decision.slow_window"},
+      {"slow_speed", "decision.slow_speed"},
+      {"mover_window", "decision.window"},
+      {"mover_votes", "decision.votes"},
+      {"mover_min_age", "decision.min_age"},
+      {"displacement_ratio", "decision.displacement_ratio"},
+      {"confirm_false_rate", "decision.confirm_false_rate"},
+      {"confirm_sigma_floor", "decision.confirm_sigma_floor"},
+      {"confirm_min_similarity", "decision.confirm_min_similarity"},
+      {"confirm_min_points", "decision.confirm_min_points"},
+      {"confirm_free_space_votes", "decision.confirm_free_space_votes"},
+      {"mover_latch", "decision.latch"},
+      {"standing_height_from_occluder", "decision.standing_height_from_occluder"},
+      {"free_space_lag", "free_space.lag"},
+      {"free_space_long_lag", "free_space.long_lag"},
+      {"free_space_long_min_fraction", "free_space.long_min_fraction"},
+      {"free_space_min_fraction", "free_space.min_fraction"},
+      {"free_space_min_points", "free_space.min_points"},
+      {"free_space_votes", "free_space.votes"},
+      {"free_space_margin", "free_space.margin"},
+      {"free_space_margin_per_metre", "free_space.margin_per_metre"},
+      {"free_space_no_return", "free_space.no_return"},
+  };
+  return keys;
+}
+
+inline std::string DetectorParameters::canonicalKey(const std::string& key) {
+  std::string snake = key;  // the command line's spelling, ground.max-slope-deg, is accepted too
   for (char& c : snake)
     if (c == '-') c = '_';
+  for (const auto& legacy : legacyKeys())
+    if (legacy.first == snake) return legacy.second;
+  return snake;
+}
+
+inline void DetectorParameters::set(const std::string& key, const std::string& value,
+                                    const std::string& where) {
+  const std::string canonical = canonicalKey(key);
   bool found = false;
-  forEachParameter([&](const char* k, auto& member, const char*) {
-    if (snake == k) {
+  forEachParameter([&](const std::string& k, auto& member, const char*) {
+    if (canonical == k) {
       detail::parseValue(detail::trim(value), member, key, where);
       found = true;
     }
@@ -519,7 +228,15 @@ inline void DetectorParameters::readConfig(const std::string& path) {
     const auto eq = line.find('=');
     const std::string where = path + ":" + std::to_string(number);
     if (eq == std::string::npos) throw InputError(path, number, "expected 'key = value'");
-    set(detail::trim(line.substr(0, eq)), line.substr(eq + 1), where);
+    const std::string key = detail::trim(line.substr(0, eq));
+    std::string snake = key;
+    for (char& c : snake)
+      if (c == '-') c = '_';
+    const std::string canonical = canonicalKey(key);
+    if (canonical != snake)
+      PCL_WARN("%s: '%s' is a key of earlier versions, use '%s'\n", where.c_str(), key.c_str(),
+               canonical.c_str());
+    set(key, line.substr(eq + 1), where);
   }
 }
 
@@ -527,104 +244,89 @@ inline void DetectorParameters::validate() const {
   auto positive = [](const char* key, double v) {
     if (!(v > 0)) throw InputError(std::string("parameter ") + key + " must be > 0");
   };
-  positive("sensor_height", sensor_height);
+  ground.validate("parameter ground.");
+  segment.validate("parameter segment.");
   if (deskew != "auto" && deskew != "on" && deskew != "off")
     throw InputError("parameter deskew must be auto, on or off (not '" + deskew + "')");
-  positive("ground_distance", ground_distance);
-  positive("depth_ratio", depth_ratio);
-  if (!(row_bridge >= 0)) throw InputError("parameter row_bridge must be >= 0");
-  positive("max_range", max_range);
-  positive("density_resolution", density_resolution);
-  positive("density_resolution_z", density_resolution_z);
-  positive("density_cells_xy", density_cells_xy);
-  positive("density_cells_z", density_cells_z);
-  positive("sigma_per_metre", sigma_per_metre);
-  positive("min_sigma", min_sigma);
-  positive("yaw_samples", yaw_samples);
-  positive("turn_yaw_samples", turn_yaw_samples);
-  positive("turn_yaw_step_deg", turn_yaw_step_deg);
-  if (!(turn_min_gain >= 0 && turn_min_gain <= 1))
-    throw InputError("parameter turn_min_gain must be in [0, 1]");
-  positive("model_half_life", model_half_life);
-  positive("max_registration_points", max_registration_points);
-  positive("young_search_radius", young_search_radius);
-  positive("acceleration_limit", acceleration_limit);
-  positive("registration_sigma", registration_sigma);
-  positive("centroid_sigma", centroid_sigma);
-  positive("registration_stop_similarity", registration_stop_similarity);
-  positive("initial_velocity_sigma", initial_velocity_sigma);
-  positive("gate_sigmas", gate_sigmas);
-  positive("max_gate_radius", max_gate_radius);
-  positive("max_tracks", max_tracks);
-  positive("mover_window", mover_window);
-  positive("split_claim_distance", split_claim_distance);
-  if (!(split_min_speed_difference >= 0))
-    throw InputError("parameter split_min_speed_difference must be >= 0");
-  positive("static_refresh_frames", static_refresh_frames);
-  if (!(static_clearance >= 0)) throw InputError("parameter static_clearance must be >= 0");
-  positive("mover_votes", mover_votes);
-  if (mover_votes > mover_window)
-    throw InputError("parameter mover_votes must not exceed mover_window");
-  if (min_similarity < 0 || min_similarity > 1)
-    throw InputError("parameter min_similarity must be in [0, 1]");
-  if (free_space_lag < 0 || free_space_lag > 50)
-    throw InputError("parameter free_space_lag must be in [0, 50]");
-  if (free_space_long_lag < 0 || free_space_long_lag > 50)
-    throw InputError("parameter free_space_long_lag must be in [0, 50]");
-  if (free_space_long_min_fraction < 0 || free_space_long_min_fraction > 1)
-    throw InputError("parameter free_space_long_min_fraction must be in [0, 1]");
-  if (free_space_min_fraction < 0 || free_space_min_fraction > 1)
-    throw InputError("parameter free_space_min_fraction must be in [0, 1]");
-  if (free_space_votes < 1) throw InputError("parameter free_space_votes must be >= 1");
-  if (free_space_min_points < 1) throw InputError("parameter free_space_min_points must be >= 1");
-  if (free_space_margin < 0 || free_space_margin_per_metre < 0)
-    throw InputError("parameters free_space_margin(_per_metre) must be >= 0");
-  if (confirm_false_rate < 0 || confirm_false_rate >= 1)
-    throw InputError("parameter confirm_false_rate must be in [0, 1)");
-  positive("confirm_sigma_floor", confirm_sigma_floor);
-  if (occluded_fraction < 0 || occluded_fraction > 1)
-    throw InputError("parameter occluded_fraction must be in [0, 1]");
-  positive("reacquire_velocity_sigma", reacquire_velocity_sigma);
-  if (occluded_skip < 0) throw InputError("parameter occluded_skip must be >= 0");
-  if (confirm_min_similarity < 0 || confirm_min_similarity > 1)
-    throw InputError("parameter confirm_min_similarity must be in [0, 1]");
-  if (confirm_min_points < 1) throw InputError("parameter confirm_min_points must be >= 1");
-  if (confirm_free_space_votes < 1)
-    throw InputError("parameter confirm_free_space_votes must be >= 1");
-  if (hold_confirmed != 0 && hold_confirmed != 1)
-    throw InputError("parameter hold_confirmed must be 0 or 1");
-  if (ground_local_slope != 0 && ground_local_slope != 1)
-    throw InputError("parameter ground_local_slope must be 0 or 1");
-  if (measurement_sigma_from_scatter != 0 && measurement_sigma_from_scatter != 1)
-    throw InputError("parameter measurement_sigma_from_scatter must be 0 or 1");
-  if (manoeuvre_window < 4) throw InputError("parameter manoeuvre_window must be >= 4");
-  positive("manoeuvre_sigmas", manoeuvre_sigmas);
-  if (velocity_fit_init != 0 && velocity_fit_init != 1)
-    throw InputError("parameter velocity_fit_init must be 0 or 1");
-  if (fast_from_fit != 0 && fast_from_fit != 1)
-    throw InputError("parameter fast_from_fit must be 0 or 1");
-  if (standing_height_from_occluder != 0 && standing_height_from_occluder != 1)
-    throw InputError("parameter standing_height_from_occluder must be 0 or 1");
-  if (mover_latch != 0 && mover_latch != 1)
-    throw InputError("parameter mover_latch must be 0 or 1");
-  if (free_space_no_return != 0 && free_space_no_return != 1)
-    throw InputError("parameter free_space_no_return must be 0 or 1");
-  if (max_missed_frames < 0) throw InputError("parameter max_missed_frames must be >= 0");
-  if (min_cluster_points < 1) throw InputError("parameter min_cluster_points must be >= 1");
-  if (mode != "registration" && mode != "centroid")
-    throw InputError("parameter mode must be 'registration' or 'centroid', not '" + mode + "'");
+  positive("track.max_range", track.max_range);
+  positive("registration.resolution", registration.resolution);
+  positive("registration.resolution_z", registration.resolution_z);
+  positive("registration.cells_xy", registration.cells_xy);
+  positive("registration.cells_z", registration.cells_z);
+  positive("registration.sigma_per_metre", registration.sigma_per_metre);
+  positive("registration.min_sigma", registration.min_sigma);
+  positive("registration.yaw_samples", registration.yaw_samples);
+  positive("registration.turn_yaw_samples", registration.turn_yaw_samples);
+  positive("registration.turn_yaw_step_deg", registration.turn_yaw_step_deg);
+  if (!(registration.turn_min_gain >= 0 && registration.turn_min_gain <= 1))
+    throw InputError("parameter registration.turn_min_gain must be in [0, 1]");
+  positive("registration.model_half_life", registration.model_half_life);
+  positive("registration.max_points", registration.max_points);
+  positive("registration.young_search_radius", registration.young_search_radius);
+  positive("track.acceleration_limit", track.acceleration_limit);
+  positive("track.registration_sigma", track.registration_sigma);
+  positive("track.centroid_sigma", track.centroid_sigma);
+  positive("registration.stop_similarity", registration.stop_similarity);
+  positive("track.initial_velocity_sigma", track.initial_velocity_sigma);
+  positive("track.gate_sigmas", track.gate_sigmas);
+  positive("track.max_gate_radius", track.max_gate_radius);
+  positive("track.max_tracks", track.max_tracks);
+  positive("decision.window", decision.window);
+  positive("track.split_claim_distance", track.split_claim_distance);
+  if (!(track.split_min_speed_difference >= 0))
+    throw InputError("parameter track.split_min_speed_difference must be >= 0");
+  positive("track.static_refresh_frames", track.static_refresh_frames);
+  if (!(track.static_clearance >= 0))
+    throw InputError("parameter track.static_clearance must be >= 0");
+  positive("decision.votes", decision.votes);
+  if (decision.votes > decision.window)
+    throw InputError("parameter decision.votes must not exceed decision.window");
+  if (registration.min_similarity < 0 || registration.min_similarity > 1)
+    throw InputError("parameter registration.min_similarity must be in [0, 1]");
+  if (free_space.lag < 0 || free_space.lag > 50)
+    throw InputError("parameter free_space.lag must be in [0, 50]");
+  if (free_space.long_lag < 0 || free_space.long_lag > 50)
+    throw InputError("parameter free_space.long_lag must be in [0, 50]");
+  if (free_space.long_min_fraction < 0 || free_space.long_min_fraction > 1)
+    throw InputError("parameter free_space.long_min_fraction must be in [0, 1]");
+  if (free_space.min_fraction < 0 || free_space.min_fraction > 1)
+    throw InputError("parameter free_space.min_fraction must be in [0, 1]");
+  if (free_space.votes < 1) throw InputError("parameter free_space.votes must be >= 1");
+  if (free_space.min_points < 1) throw InputError("parameter free_space.min_points must be >= 1");
+  if (free_space.margin < 0 || free_space.margin_per_metre < 0)
+    throw InputError("parameters free_space.margin(_per_metre) must be >= 0");
+  if (decision.confirm_false_rate < 0 || decision.confirm_false_rate >= 1)
+    throw InputError("parameter decision.confirm_false_rate must be in [0, 1)");
+  positive("decision.confirm_sigma_floor", decision.confirm_sigma_floor);
+  if (track.occluded_fraction < 0 || track.occluded_fraction > 1)
+    throw InputError("parameter track.occluded_fraction must be in [0, 1]");
+  positive("track.reacquire_velocity_sigma", track.reacquire_velocity_sigma);
+  if (track.occluded_skip < 0) throw InputError("parameter track.occluded_skip must be >= 0");
+  if (decision.confirm_min_similarity < 0 || decision.confirm_min_similarity > 1)
+    throw InputError("parameter decision.confirm_min_similarity must be in [0, 1]");
+  if (decision.confirm_min_points < 1)
+    throw InputError("parameter decision.confirm_min_points must be >= 1");
+  if (decision.confirm_free_space_votes < 1)
+    throw InputError("parameter decision.confirm_free_space_votes must be >= 1");
+  if (track.manoeuvre_window < 4) throw InputError("parameter track.manoeuvre_window must be >= 4");
+  positive("track.manoeuvre_sigmas", track.manoeuvre_sigmas);
+  if (track.max_missed_frames < 0)
+    throw InputError("parameter track.max_missed_frames must be >= 0");
+  if (track.mode != "registration" && track.mode != "centroid")
+    throw InputError("parameter track.mode must be 'registration' or 'centroid', not '" +
+                     track.mode + "'");
 }
 
 inline std::vector<std::string> DetectorParameters::keys() const {
   std::vector<std::string> k;
-  forEachParameter([&](const char* key, const auto&, const char*) { k.emplace_back(key); });
+  forEachParameter([&](const std::string& key, const auto&, const char*) { k.push_back(key); });
   return k;
 }
 
 inline std::string DetectorParameters::toConfig() const {
   std::string out;
-  forEachParameter([&](const char* key, const auto& v, const char* doc) {
-    out += std::string(key) + " = " + detail::formatValue(v) + "  # " + doc + "\n";
+  forEachParameter([&](const std::string& key, const auto& v, const char* doc) {
+    out += key + " = " + detail::formatValue(v) + "  # " + doc + "\n";
   });
   return out;
 }
@@ -632,7 +334,7 @@ inline std::string DetectorParameters::toConfig() const {
 inline std::string DetectorParameters::toJson() const {
   std::string out = "{";
   bool first = true;
-  forEachParameter([&](const char* key, const auto& v, const char*) {
+  forEachParameter([&](const std::string& key, const auto& v, const char*) {
     out += std::string(first ? "" : ", ") + "\"" + key + "\": " + detail::jsonValue(v);
     first = false;
   });

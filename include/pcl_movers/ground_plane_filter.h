@@ -3,6 +3,8 @@
  */
 #pragma once
 
+#include <pcl_movers/ground_parameters.h>
+
 #include <pcl/filters/filter_indices.h>
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
@@ -91,11 +93,16 @@ class GroundPlaneFilter : public pcl::FilterIndices<PointT> {
     float height(const Eigen::Vector3f& p) const { return normal.dot(p) + d; }
   };
 
-  /** \param extract_removed_indices set to true to be able to call getRemovedIndices(). */
+  /** \param extract_removed_indices set to true to be able to call getRemovedIndices().
+   * The settings start from GroundParameters' defaults. */
   explicit GroundPlaneFilter(bool extract_removed_indices = false);
 
-  /** \brief Points whose height above their cell's plane is below this are ground [m]
-   * (default 0.1). */
+  /** \brief Sets every setting GroundParameters holds (the individual setters below set one). */
+  void setParameters(const GroundParameters& parameters);
+  /** \brief The settings GroundParameters holds, as they are now. */
+  GroundParameters getParameters() const;
+
+  /** \brief Points whose height above their cell's plane is below this are ground [m]. */
   void setDistanceThreshold(float threshold) { distance_threshold_ = threshold; }
   float getDistanceThreshold() const { return distance_threshold_; }
 
@@ -103,8 +110,8 @@ class GroundPlaneFilter : public pcl::FilterIndices<PointT> {
   void setFitThreshold(float threshold) { fit_threshold_ = threshold; }
   float getFitThreshold() const { return fit_threshold_; }
 
-  /** \brief Steepest plane still taken for ground [rad] (default 10°); steeper fits fall back to
-   * the prior plane. */
+  /** \brief Steepest plane still taken for ground [rad]; steeper fits fall back to the prior
+   * plane. */
   void setMaxTilt(float radians) { max_tilt_ = radians; }
   float getMaxTilt() const { return max_tilt_; }
 
@@ -118,12 +125,12 @@ class GroundPlaneFilter : public pcl::FilterIndices<PointT> {
   void setMaxSlopeChange(float slope) { max_slope_change_ = slope; }
   float getMaxSlopeChange() const { return max_slope_change_; }
 
-  /** \brief Height of the sensor above the ground under it [m] (default 1.73, KITTI's HDL-64E);
-   * the innermost cells start from a horizontal plane this far below `sensor_origin_`. */
+  /** \brief Height of the sensor above the ground under it [m]; the innermost cells start from
+   * a horizontal plane this far below `sensor_origin_`. */
   void setSensorHeight(float height) { sensor_height_ = height; }
   float getSensorHeight() const { return sensor_height_; }
 
-  /** \brief Number of equal azimuth sectors (default 32). */
+  /** \brief Number of equal azimuth sectors. */
   void setNumSectors(int sectors) { num_sectors_ = sectors; }
   int getNumSectors() const { return num_sectors_; }
 
@@ -153,25 +160,24 @@ class GroundPlaneFilter : public pcl::FilterIndices<PointT> {
   void setMaxIterations(int n) { max_iterations_ = n; }
   int getMaxIterations() const { return max_iterations_; }
 
-  /** \brief Whether to apply the local-slope test on organized inputs (default true; ignored on
-   * unorganized clouds, which have no beam neighbours). */
+  /** \brief Whether to apply the local-slope test on organized inputs (ignored on unorganized
+   * clouds, which have no beam neighbours: organize them first, see RangeImageOrganizer). */
   void setLocalSlopeCheck(bool check) { local_slope_check_ = check; }
   bool getLocalSlopeCheck() const { return local_slope_check_; }
 
   /** \brief Steepest local slope [rad] between a point and the points of the beams just above
-   * and below it in its column (default 20°); see the class description. */
+   * and below it in its column; see the class description. */
   void setMaxLocalSlope(float radians) { max_local_slope_ = radians; }
   float getMaxLocalSlope() const { return max_local_slope_; }
 
-  /** \brief Height noise [m] forgiven in the local-slope test (default 0.02, the HDL-64E's range
-   * noise): a rise counts as steep only when it exceeds this plus tan(max local slope) times the
-   * horizontal distance. */
+  /** \brief Height noise [m] forgiven in the local-slope test: a rise counts as steep only when
+   * it exceeds this plus tan(max local slope) times the horizontal distance. */
   void setRangeNoise(float noise) { range_noise_ = noise; }
   float getRangeNoise() const { return range_noise_; }
 
   /** \brief Column neighbours further than this [m] from their plane do not take part in the
-   * local-slope test (default 0.3): they belong to an object standing on the ground (a wall, a
-   * car), and the step up to them says nothing about the point at its foot. */
+   * local-slope test: they belong to an object standing on the ground (a wall, a car), and the
+   * step up to them says nothing about the point at its foot. */
   void setLocalSlopeBand(float band) { local_slope_band_ = band; }
   float getLocalSlopeBand() const { return local_slope_band_; }
 
@@ -195,23 +201,23 @@ class GroundPlaneFilter : public pcl::FilterIndices<PointT> {
   /** \brief Radial size of a ring [m] (the open outermost one: as deep as the ring inside it). */
   float cellDepth(int ring) const;
 
-  float distance_threshold_ = 0.1f;
+  float distance_threshold_;  // these eight: GroundParameters' defaults
   float fit_threshold_ = 0.1f;
-  float max_tilt_ = 0.1745f;  // 10°
+  float max_tilt_;
   float max_step_ = 0.5f;
   float max_slope_change_ = 0.1f;
-  float sensor_height_ = 1.73f;
-  int num_sectors_ = 32;
+  float sensor_height_;
+  int num_sectors_;
   std::vector<float> ring_edges_{0.f,   6.f,  8.f,  10.f, 12.5f, 15.f, 18.f, 21.5f,
                                  25.5f, 30.f, 35.f, 41.f, 48.f,  57.f, 68.f, 82.f};
   float curved_cell_depth_ = 10.f;
   int min_points_per_cell_ = 12;
   int max_samples_ = 64;
   int max_iterations_ = 40;
-  bool local_slope_check_ = true;
-  float max_local_slope_ = 0.349f;  // 20°
-  float range_noise_ = 0.02f;
-  float local_slope_band_ = 0.3f;
+  bool local_slope_check_;
+  float max_local_slope_;
+  float range_noise_;
+  float local_slope_band_;
 
   std::vector<Plane> cell_planes_;
   std::vector<std::uint8_t> cell_fitted_;

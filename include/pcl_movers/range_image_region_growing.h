@@ -3,6 +3,8 @@
  */
 #pragma once
 
+#include <pcl_movers/segmentation_parameters.h>
+
 #include <pcl/PointIndices.h>
 #include <pcl/pcl_base.h>
 #include <pcl/point_cloud.h>
@@ -66,14 +68,34 @@ class RangeImageRegionGrowing : public pcl::PCLBase<PointT> {
   using Ptr = pcl::shared_ptr<RangeImageRegionGrowing<PointT>>;
   using ConstPtr = pcl::shared_ptr<const RangeImageRegionGrowing<PointT>>;
 
-  RangeImageRegionGrowing() = default;
+  /** \brief The settings start from SegmentationParameters' defaults. */
+  RangeImageRegionGrowing() { setParameters(SegmentationParameters()); }
 
-  /** \brief k in d_T = k · range (default 0.03: at 10 m, neighbours up to 0.3 m apart in depth
+  /** \brief Sets every setting SegmentationParameters holds. */
+  void setParameters(const SegmentationParameters& p) {
+    depth_threshold_factor_ = static_cast<float>(p.depth_ratio);
+    min_depth_threshold_ = static_cast<float>(p.depth_min);
+    max_gap_ = p.max_gap;
+    bridge_length_ = static_cast<float>(p.row_bridge);
+    min_cluster_size_ = p.min_cluster_points;
+  }
+  /** \brief The settings SegmentationParameters holds, as they are now. */
+  SegmentationParameters getParameters() const {
+    SegmentationParameters p;
+    p.depth_ratio = depth_threshold_factor_;
+    p.depth_min = min_depth_threshold_;
+    p.max_gap = max_gap_;
+    p.row_bridge = bridge_length_;
+    p.min_cluster_points = min_cluster_size_;
+    return p;
+  }
+
+  /** \brief k in d_T = k · range (at k = 0.05 and 10 m, neighbours up to 0.5 m apart in depth
    * join). */
   void setDepthThresholdFactor(float k) { depth_threshold_factor_ = k; }
   float getDepthThresholdFactor() const { return depth_threshold_factor_; }
 
-  /** \brief Absolute floor of the depth threshold [m] (default 0.1). */
+  /** \brief Absolute floor of the depth threshold [m]. */
   void setMinDepthThreshold(float d) { min_depth_threshold_ = d; }
   float getMinDepthThreshold() const { return min_depth_threshold_; }
 
@@ -81,17 +103,16 @@ class RangeImageRegionGrowing : public pcl::PCLBase<PointT> {
   void setWrapAround(bool wrap) { wrap_around_ = wrap; }
   bool getWrapAround() const { return wrap_around_; }
 
-  /** \brief Empty cells bridged in each direction (default 2; 0 = the paper's strict 8-neighbour
-   * rule). */
+  /** \brief Empty cells bridged in each direction (0 = the paper's strict 8-neighbour rule). */
   void setMaxGap(int gap) { max_gap_ = gap; }
   int getMaxGap() const { return max_gap_; }
 
-  /** \brief Longest gap [m] bridged along a row (default 0.5, the usual Euclidean clustering
-   * tolerance on KITTI; 0 = off): see the class description. */
+  /** \brief Longest gap [m] bridged along a row (0 = off; 0.5 is the usual Euclidean clustering
+   * tolerance on KITTI): see the class description. */
   void setBridgeLength(float metres) { bridge_length_ = metres; }
   float getBridgeLength() const { return bridge_length_; }
 
-  /** \brief Clusters with fewer points are dropped (default 1). */
+  /** \brief Clusters with fewer points are dropped. */
   void setMinClusterSize(int n) { min_cluster_size_ = n; }
   int getMinClusterSize() const { return min_cluster_size_; }
 
@@ -172,12 +193,12 @@ class RangeImageRegionGrowing : public pcl::PCLBase<PointT> {
   /** \brief Root of the set holding i, with path halving. */
   int findRoot(int i);
 
-  float depth_threshold_factor_ = 0.03f;
-  float min_depth_threshold_ = 0.1f;
+  float depth_threshold_factor_;  // these five: SegmentationParameters' defaults
+  float min_depth_threshold_;
   bool wrap_around_ = true;
-  int max_gap_ = 2;
-  float bridge_length_ = 0.5f;
-  int min_cluster_size_ = 1;
+  int max_gap_;
+  float bridge_length_;
+  int min_cluster_size_;
   int max_cluster_size_ = std::numeric_limits<int>::max();
 
   // Work buffers kept between calls so a sequence of frames does not reallocate.

@@ -83,7 +83,7 @@ int main(int argc, char** argv) {
     pcl_movers::MoverDetector<pcl::PointXYZI> detector;
     pcl_movers::DetectorParameters params;
     params.sensor = scenario.sensor.preset;
-    params.sensor_height = scenario.sensor.height;
+    params.ground.sensor_height = scenario.sensor.height;
     detector.setParameters(params);
     detector.setSensorModel(simulator.getSensor());
 

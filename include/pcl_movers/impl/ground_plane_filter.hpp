@@ -42,6 +42,35 @@ template <typename PointT>
 GroundPlaneFilter<PointT>::GroundPlaneFilter(bool extract_removed_indices)
     : pcl::FilterIndices<PointT>(extract_removed_indices) {
   filter_name_ = "GroundPlaneFilter";
+  setParameters(GroundParameters());
+}
+
+template <typename PointT>
+void GroundPlaneFilter<PointT>::setParameters(const GroundParameters& p) {
+  constexpr double kRadPerDeg = M_PI / 180.0;
+  distance_threshold_ = static_cast<float>(p.distance);
+  max_tilt_ = static_cast<float>(p.max_slope_deg * kRadPerDeg);
+  sensor_height_ = static_cast<float>(p.sensor_height);
+  num_sectors_ = p.sectors;
+  local_slope_check_ = p.local_slope;
+  max_local_slope_ = static_cast<float>(p.local_slope_deg * kRadPerDeg);
+  range_noise_ = static_cast<float>(p.range_noise);
+  local_slope_band_ = static_cast<float>(p.slope_band);
+}
+
+template <typename PointT>
+GroundParameters GroundPlaneFilter<PointT>::getParameters() const {
+  constexpr double kDegPerRad = 180.0 / M_PI;
+  GroundParameters p;
+  p.distance = distance_threshold_;
+  p.max_slope_deg = max_tilt_ * kDegPerRad;
+  p.sensor_height = sensor_height_;
+  p.sectors = num_sectors_;
+  p.local_slope = local_slope_check_;
+  p.local_slope_deg = max_local_slope_ * kDegPerRad;
+  p.range_noise = range_noise_;
+  p.slope_band = local_slope_band_;
+  return p;
 }
 
 template <typename PointT>

@@ -74,7 +74,7 @@ template <typename PointT>
 void MoverDetector<PointT>::coast(const Eigen::Isometry3d& pose, double time, FrameResult& result) {
   result.blind = true;
   result.organized.reset(new PointCloud);
-  if (parameters_.free_space_lag > 0) {
+  if (parameters_.free_space.lag > 0) {
     free_space_.addBlindScan();  // keeps the map's frame lags in step with the frames
     tracker_.setFreeSpaceMap(&free_space_);
   } else {
@@ -144,10 +144,7 @@ pcl::IndicesPtr MoverDetector<PointT>::removeGround(const PointCloudConstPtr& or
   if (!ground_.object) ground_.object = std::make_shared<GroundPlaneFilter<PointT>>();
   GroundPlaneFilter<PointT>& ground = *ground_.object;
   ground.setInputCloud(organized);
-  ground.setDistanceThreshold(static_cast<float>(p.ground_distance));
-  ground.setMaxTilt(static_cast<float>(p.ground_max_slope_deg * M_PI / 180.0));
-  ground.setSensorHeight(static_cast<float>(p.sensor_height));
-  ground.setLocalSlopeCheck(p.ground_local_slope != 0);
+  ground.setParameters(p.ground);
   pcl::IndicesPtr objects(new pcl::Indices);
   ground.filter(*objects);
   return objects;
@@ -161,11 +158,7 @@ std::vector<pcl::PointIndices> MoverDetector<PointT>::segmentObjects(
   RangeImageRegionGrowing<PointT>& segmenter = *segmenter_.object;
   segmenter.setInputCloud(organized);
   segmenter.setIndices(objects);
-  segmenter.setDepthThresholdFactor(static_cast<float>(p.depth_ratio));
-  segmenter.setMinDepthThreshold(static_cast<float>(p.depth_min));
-  segmenter.setMaxGap(p.max_gap);
-  segmenter.setBridgeLength(static_cast<float>(p.row_bridge));
-  segmenter.setMinClusterSize(p.min_cluster_points);
+  segmenter.setParameters(p.segment);
   std::vector<pcl::PointIndices> clusters;
   segmenter.segment(clusters);
   return clusters;
@@ -241,33 +234,33 @@ void MoverDetector<PointT>::process(const PointCloudConstPtr& scan,
   // Tracking; the free-space map needs the current scan first (receding-object test).
   const auto t4 = Clock::now();
   // (Re)bound every frame: a copied detector must not point into the original's map.
-  if (p.free_space_lag > 0) {
-    free_space_.setHistory(std::max(p.free_space_lag, p.free_space_long_lag) + 1);
-    free_space_.setMargin(p.free_space_margin, p.free_space_margin_per_metre);
-    free_space_.setNoReturnRange(p.free_space_no_return ? p.max_range : 0.0);
-    free_space_.setSensorHeight(p.sensor_height);
+  if (p.free_space.lag > 0) {
+    free_space_.setHistory(std::max(p.free_space.lag, p.free_space.long_lag) + 1);
+    free_space_.setMargin(p.free_space.margin, p.free_space.margin_per_metre);
+    free_space_.setNoReturnRange(p.free_space.no_return ? p.track.max_range : 0.0);
+    free_space_.setSensorHeight(p.ground.sensor_height);
     free_space_.addScan(*organized, pose);
     tracker_.setFreeSpaceMap(&free_space_);
   } else {
     tracker_.setFreeSpaceMap(nullptr);
   }
   // One labelling of the range image's cells serves both occlusion tests below.
-  if (p.occluded_fraction > 0 || p.standing_height_from_occluder)
+  if (p.track.occluded_fraction > 0 || p.decision.standing_height_from_occluder)
     RangeImageRegionGrowing<PointT>::cellLabels(*organized, *objects, clusters, cell_labels_);
   // Occluded cluster sides (range image, sensor frame): measurements there can slide.
-  if (p.occluded_fraction > 0)
+  if (p.track.occluded_fraction > 0)
     RangeImageRegionGrowing<PointT>::occludedSides(
-        *organized, cell_labels_, clusters, static_cast<float>(p.depth_ratio),
-        static_cast<float>(p.depth_min), p.max_gap, true, static_cast<float>(p.occluded_fraction),
-        occluded_);
+        *organized, cell_labels_, clusters, static_cast<float>(p.segment.depth_ratio),
+        static_cast<float>(p.segment.depth_min), p.segment.max_gap, true,
+        static_cast<float>(p.track.occluded_fraction), occluded_);
   else
     occluded_.clear();
   // Clusters hidden from below by a nearer object: the world z of that object's lowest point.
   floor_z_.clear();
-  if (p.standing_height_from_occluder) {
+  if (p.decision.standing_height_from_occluder) {
     RangeImageRegionGrowing<PointT>::occluderFloors(
-        *organized, cell_labels_, clusters, static_cast<float>(p.depth_ratio),
-        static_cast<float>(p.depth_min), p.max_gap, 0.5f, floors_);
+        *organized, cell_labels_, clusters, static_cast<float>(p.segment.depth_ratio),
+        static_cast<float>(p.segment.depth_min), p.segment.max_gap, 0.5f, floors_);
     floor_z_.assign(clusters.size(), std::numeric_limits<double>::quiet_NaN());
     for (std::size_t c = 0; c < clusters.size(); ++c)
       if (floors_[c] >= 0)

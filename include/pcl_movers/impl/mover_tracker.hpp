@@ -111,7 +111,7 @@ void MoverTracker<PointT>::ensurePoints(const PointCloud& cloud, const pcl::Poin
   // near object is already smooth with a few hundred: keep an even subsample.
   const std::size_t n = indices.indices.size();
   const std::size_t cap =
-      static_cast<std::size_t>(std::max(1, parameters_.max_registration_points));
+      static_cast<std::size_t>(std::max(1, parameters_.registration.max_points));
   const double stride = n > cap ? static_cast<double>(n) / cap : 1.0;
   candidate.points->reserve(std::min(n, cap));
   for (double k = 0; k < n; k += stride) {
@@ -125,11 +125,12 @@ template <typename PointT>
 SurfaceDensity::Ptr MoverTracker<PointT>::makeModel(const Candidate& candidate,
                                                     const Eigen::Vector3d& sensor_origin) const {
   const auto& p = parameters_;
-  SurfaceDensity::Ptr model(new SurfaceDensity(
-      p.density_cells_xy, p.density_cells_xy, p.density_cells_z,
-      static_cast<float>(p.density_resolution), static_cast<float>(p.density_resolution_z)));
-  model->setSigmaPerMetre(static_cast<float>(p.sigma_per_metre));
-  model->setMinSigma(static_cast<float>(p.min_sigma));
+  SurfaceDensity::Ptr model(new SurfaceDensity(p.registration.cells_xy, p.registration.cells_xy,
+                                               p.registration.cells_z,
+                                               static_cast<float>(p.registration.resolution),
+                                               static_cast<float>(p.registration.resolution_z)));
+  model->setSigmaPerMetre(static_cast<float>(p.registration.sigma_per_metre));
+  model->setMinSigma(static_cast<float>(p.registration.min_sigma));
   model->compute(*candidate.points, sensor_origin.template cast<float>(),
                  candidate.features.centroid.template cast<float>());
   return model;
@@ -144,12 +145,12 @@ bool MoverTracker<PointT>::registerCandidate(const Track& track, Candidate& cand
   registration_.setInputSource(candidate.points);
   registration_.setTargetDensity(track.model);
   registration_.setSensorOrigin(sensor_origin.template cast<float>());
-  registration_.setResolution(static_cast<float>(p.density_resolution));
+  registration_.setResolution(static_cast<float>(p.registration.resolution));
   registration_.setSearchRadius(static_cast<float>(search_radius));
-  registration_.setYawSamples(p.yaw_samples);
-  registration_.setSigmaPerMetre(static_cast<float>(p.sigma_per_metre));
-  registration_.setMinSigma(static_cast<float>(p.min_sigma));
-  registration_.setMinSimilarity(static_cast<float>(p.min_similarity));
+  registration_.setYawSamples(p.registration.yaw_samples);
+  registration_.setSigmaPerMetre(static_cast<float>(p.registration.sigma_per_metre));
+  registration_.setMinSigma(static_cast<float>(p.registration.min_sigma));
+  registration_.setMinSimilarity(static_cast<float>(p.registration.min_similarity));
   // Views are built for the assigned matches only (buildView()).
   registration_.setComputeSourceDensity(false);
   // The guess turns the view by the track's model yaw about the predicted reference point and
@@ -163,7 +164,8 @@ bool MoverTracker<PointT>::registerCandidate(const Track& track, Candidate& cand
   guess.template block<2, 1>(0, 3) = centre.template head<2>() - turn * from;
   PointCloud aligned;
   registration_.align(aligned, guess);
-  bool found = registration_.hasConverged() && registration_.getSimilarity() >= p.min_similarity;
+  bool found = registration_.hasConverged() &&
+               registration_.getSimilarity() >= p.registration.min_similarity;
   // A turning vehicle's view no longer matches its model at the model's yaw (the urban van
   // turning at 60°/s was held, then lost, for 10 frames; kept, it still matched with B ≈ 0.7
   // while its reported velocity pointed 30-60° off): a mover's candidate that does not match
@@ -173,15 +175,16 @@ bool MoverTracker<PointT>::registerCandidate(const Track& track, Candidate& cand
   // (velocity RMS worse on every set), and so did a smaller gain (0.02: wooded 0.25 → 0.40).
   double similarity = found ? registration_.getSimilarity() : 0.0;
   Eigen::Matrix4f T = registration_.getFinalTransformation();
-  if (!(similarity >= p.registration_stop_similarity) && p.turn_yaw_samples > 1 &&
+  if (!(similarity >= p.registration.stop_similarity) && p.registration.turn_yaw_samples > 1 &&
       (track.mover || track.confirmed)) {
     ++registrations_;
-    registration_.setYawSamples(p.turn_yaw_samples);
-    registration_.setYawStep(static_cast<float>(p.turn_yaw_step_deg * M_PI / 180.0));
+    registration_.setYawSamples(p.registration.turn_yaw_samples);
+    registration_.setYawStep(static_cast<float>(p.registration.turn_yaw_step_deg * M_PI / 180.0));
     registration_.align(aligned, guess);
-    registration_.setYawSamples(p.yaw_samples);
-    if (registration_.hasConverged() && registration_.getSimilarity() >= p.min_similarity &&
-        registration_.getSimilarity() > similarity + p.turn_min_gain) {
+    registration_.setYawSamples(p.registration.yaw_samples);
+    if (registration_.hasConverged() &&
+        registration_.getSimilarity() >= p.registration.min_similarity &&
+        registration_.getSimilarity() > similarity + p.registration.turn_min_gain) {
       found = true;
       similarity = registration_.getSimilarity();
       T = registration_.getFinalTransformation();
@@ -213,8 +216,9 @@ void MoverTracker<PointT>::buildView(const Candidate& candidate, const Eigen::Ma
     const Eigen::Vector3f v(q.x, q.y, q.z);
     if (!v.allFinite()) continue;
     view_points_.push_back(r * v + t);
-    view_sigmas_.push_back(std::max(static_cast<float>(p.min_sigma),
-                                    static_cast<float>(p.sigma_per_metre) * (v - origin).norm()));
+    view_sigmas_.push_back(
+        std::max(static_cast<float>(p.registration.min_sigma),
+                 static_cast<float>(p.registration.sigma_per_metre) * (v - origin).norm()));
   }
   if (view_.getNx() != model.getNx() || view_.getNy() != model.getNy() ||
       view_.getNz() != model.getNz())
@@ -275,19 +279,21 @@ double MoverTracker<PointT>::speedSignificanceRatio(std::size_t positions, doubl
 template <typename PointT>
 bool MoverTracker<PointT>::wellMeasuredMotion(const Track& track) const {
   const auto& p = parameters_;
-  if (!(p.confirm_false_rate > 0) || track.large || !track.model) return false;
+  if (!(p.decision.confirm_false_rate > 0) || track.large || !track.model) return false;
   // B is 0 for centroid updates, so they never qualify; the current view must be a good match of
   // a well-sampled object (earlier positions' quality shows in the scatter about the line).
-  if (track.similarity < p.confirm_min_similarity || track.features.points < p.confirm_min_points)
+  if (track.similarity < p.decision.confirm_min_similarity ||
+      track.features.points < p.decision.confirm_min_points)
     return false;
   // A view cut by a nearer object is placed by its visible part, which slides while the object
   // emerges or hides: its line can be straight and wrong.
   if (track.features.occluded) return false;
-  const LineFit fit = fitVelocity(track.history, p.confirm_sigma_floor);
+  const LineFit fit = fitVelocity(track.history, p.decision.confirm_sigma_floor);
   if (!fit.valid) return false;
   const double speed = fit.velocity.norm();
-  return speed > p.mover_speed &&
-         speed >= speedSignificanceRatio(fit.positions, p.confirm_false_rate) * fit.sigma_v;
+  return speed > p.decision.speed &&
+         speed >=
+             speedSignificanceRatio(fit.positions, p.decision.confirm_false_rate) * fit.sigma_v;
 }
 
 template <typename PointT>
@@ -296,19 +302,19 @@ bool MoverTracker<PointT>::fastMotion(const Track& track, bool seen_standing_onl
   const auto& p = parameters_;
   int votes = 0;
   for (const char f : track.fast) votes += f;
-  if (!well_measured && votes < p.mover_votes) return false;
+  if (!well_measured && votes < p.decision.votes) return false;
   // Measured only down to what hides it, a track needs every speed vote of a full window: small
   // fragments above parked cars in a real street (KITTI city, 20-50 points, 0.1-0.3 m tall)
   // moved with their centroids' jumps and passed mover_votes of them.
   if (seen_standing_only &&
-      (static_cast<int>(track.fast.size()) < p.mover_window || votes < p.mover_window))
+      (static_cast<int>(track.fast.size()) < p.decision.window || votes < p.decision.window))
     return false;
   const auto& first = track.history.front();
   const auto& last = track.history.back();
   const double elapsed = last.z() - first.z();
   if (elapsed <= 0) return false;
   const double displacement = (last.template head<2>() - first.template head<2>()).norm();
-  return displacement >= p.displacement_ratio * p.mover_speed * elapsed;
+  return displacement >= p.decision.displacement_ratio * p.decision.speed * elapsed;
 }
 
 template <typename PointT>
@@ -319,16 +325,17 @@ bool MoverTracker<PointT>::sustainedMotion(const Track& track) const {
   // the ego in KITTI city at 0.9 m/s).
   // Five positions at least (6 degrees of freedom for the scatter): a slow track is registered
   // only every static_refresh_frames frames while its centroid barely moves (cheap frames).
-  if (!(p.slow_window > 0) || track.large || !track.model || track.long_history.size() < 5)
+  if (!(p.decision.slow_window > 0) || track.large || !track.model || track.long_history.size() < 5)
     return false;
   // The window must be mostly covered: a short run of positions is the fast test's business.
   const double span = track.long_history.back().z() - track.long_history.front().z();
-  if (span < 0.75 * p.slow_window) return false;
-  const LineFit fit = fitVelocity(track.long_history, p.registration_sigma);
+  if (span < 0.75 * p.decision.slow_window) return false;
+  const LineFit fit = fitVelocity(track.long_history, p.track.registration_sigma);
   if (!fit.valid) return false;
   const double speed = fit.velocity.norm();
-  return speed > p.slow_speed &&
-         speed >= speedSignificanceRatio(fit.positions, p.confirm_false_rate) * fit.sigma_v;
+  return speed > p.decision.slow_speed &&
+         speed >=
+             speedSignificanceRatio(fit.positions, p.decision.confirm_false_rate) * fit.sigma_v;
 }
 
 template <typename PointT>
@@ -441,9 +448,9 @@ void MoverTracker<PointT>::updateVelocityFilter(Track& track, const Eigen::Vecto
     return;
   }
   track.registered.emplace_back(measurement.x(), measurement.y(), time);
-  while (static_cast<int>(track.registered.size()) > p.manoeuvre_window)
+  while (static_cast<int>(track.registered.size()) > p.track.manoeuvre_window)
     track.registered.pop_front();
-  if (!p.measurement_sigma_from_scatter) return;
+  if (!p.track.sigma_from_scatter) return;
   // The first registered update starts it from the tracking filter (which has just taken the
   // same measurement); so do the restarts of the tracking filter (see velocity_fit_init).
   if (!track.velocity_filter.isInitialized()) {
@@ -466,9 +473,9 @@ void MoverTracker<PointT>::updateVelocityFilter(Track& track, const Eigen::Vecto
                         .maxCoeff()));
   track.velocity_filter.update(measurement.template head<2>(),
                                Eigen::Matrix2d::Identity() * sigma * sigma);
-  if (track.hits >= p.mover_min_age)
+  if (track.hits >= p.decision.min_age)
     limitAcceleration(track.velocity_filter, v_before,
-                      std::max(p.acceleration_limit * since, p.gate_sigmas * sigma_v));
+                      std::max(p.track.acceleration_limit * since, p.track.gate_sigmas * sigma_v));
 }
 
 template <typename PointT>
@@ -480,12 +487,13 @@ double MoverTracker<PointT>::registeredSigma(const Track& track, const Eigen::Ve
   // delivers: the registered positions of a van at 40-80 m scattered by 3-10 cm about their
   // track while σ said 0.4-0.8 m, so the filter lagged every manoeuvre by ~0.5 s (open: 1.3 m/s
   // behind an accelerating van). The track's own scatter measures it, per object and view.
-  const double prior = std::max(p.registration_sigma, p.measurement_sigma_per_metre * range);
-  if (!p.measurement_sigma_from_scatter) return prior;
+  const double prior =
+      std::max(p.track.registration_sigma, p.track.measurement_sigma_per_metre * range);
+  if (!p.track.sigma_from_scatter) return prior;
   // A view that matched its model poorly (B below registration_stop_similarity: the object turns,
   // recedes behind trees, is partly hidden) is placed less precisely than the scatter of the
   // earlier positions says: it keeps the prior.
-  if (!(similarity >= p.registration_stop_similarity)) return prior;
+  if (!(similarity >= p.registration.stop_similarity)) return prior;
   // So is a view cut by a nearer object: the occluder cuts the object at the same world place in
   // consecutive scans, which pulls the registration towards no motion while the visible part grows
   // or shrinks (urban car 4 emerging behind parked cars registered at 1-4 m/s for 8).
@@ -496,19 +504,19 @@ double MoverTracker<PointT>::registeredSigma(const Track& track, const Eigen::Ve
   // established, unless its positions show a significant acceleration: a quadratic through the
   // last manoeuvre_window registered positions (~1 s), whose curvature a slide of a few frames
   // does not sustain.
-  const bool young = static_cast<int>(track.registered.size()) < p.manoeuvre_window;
+  const bool young = static_cast<int>(track.registered.size()) < p.track.manoeuvre_window;
   if (!young) {
-    const QuadraticFit quadratic = fitAcceleration(track.registered, p.registration_sigma);
+    const QuadraticFit quadratic = fitAcceleration(track.registered, p.track.registration_sigma);
     if (!quadratic.valid ||
-        !(quadratic.acceleration.norm() > p.manoeuvre_sigmas * quadratic.sigma_a))
+        !(quadratic.acceleration.norm() > p.track.manoeuvre_sigmas * quadratic.sigma_a))
       return prior;
   }
   std::deque<Eigen::Vector3d> positions = track.history;  // at most mover_window + 1
   positions.emplace_back(measurement.x(), measurement.y(), time);
-  while (static_cast<int>(positions.size()) > p.mover_window + 1) positions.pop_front();
+  while (static_cast<int>(positions.size()) > p.decision.window + 1) positions.pop_front();
   // Four positions leave 4 degrees of freedom for the scatter; with fewer it is a guess.
   if (positions.size() < 4) return prior;
-  const LineFit fit = fitVelocity(positions, p.registration_sigma);
+  const LineFit fit = fitVelocity(positions, p.track.registration_sigma);
   return fit.valid ? fit.sigma : prior;
 }
 
@@ -517,14 +525,14 @@ bool MoverTracker<PointT>::freeSpaceEvidence(Track& track,
                                              const std::vector<Eigen::Vector3f>& points) const {
   const auto& p = parameters_;
   track.free_space = 0;
-  if (!free_space_map_ || p.free_space_lag <= 0) return true;  // test disabled
+  if (!free_space_map_ || p.free_space.lag <= 0) return true;  // test disabled
   // (a) approaching / crossing: the object now fills space an earlier scan saw empty. In the
   // first frames of a sequence fewer than free_space_lag earlier scans exist, and the oldest one
   // is used: a static object gives no evidence at any lag, and a mover that has moved less than
   // the margin since gives none either, so only clearly moving objects are confirmed before the
   // lag has passed (open truck, seen from frame 0: confirmed at frame 5 before, when the first
   // lag-5 scan exists).
-  const int lag = std::min(p.free_space_lag, free_space_map_->size() - 1);
+  const int lag = std::min(p.free_space.lag, free_space_map_->size() - 1);
   auto ahead = lag >= 1 ? free_space_map_->test(points, lag) : FreeSpaceMap::Evidence();
   // (b) receding: the object's earlier surface is now seen through by the current scan.
   FreeSpaceMap::Evidence behind;
@@ -535,10 +543,10 @@ bool MoverTracker<PointT>::freeSpaceEvidence(Track& track,
     track.past_points.pop_front();
   }
   const auto score = [&](const FreeSpaceMap::Evidence& e) {
-    return e.seen_through >= p.free_space_min_points ? e.fraction() : 0.0;
+    return e.seen_through >= p.free_space.min_points ? e.fraction() : 0.0;
   };
   track.free_space = std::max(score(ahead), score(behind));
-  return track.free_space >= p.free_space_min_fraction;
+  return track.free_space >= p.free_space.min_fraction;
 }
 
 template <typename PointT>
@@ -546,13 +554,13 @@ bool MoverTracker<PointT>::slowFreeSpaceEvidence(Track& track,
                                                  const std::vector<Eigen::Vector3f>& points) const {
   const auto& p = parameters_;
   track.free_space = 0;
-  if (!free_space_map_ || p.free_space_lag <= 0) return true;  // test disabled
+  if (!free_space_map_ || p.free_space.lag <= 0) return true;  // test disabled
   const int lag =
-      std::min(std::max(p.free_space_long_lag, p.free_space_lag), free_space_map_->size() - 1);
+      std::min(std::max(p.free_space.long_lag, p.free_space.lag), free_space_map_->size() - 1);
   if (lag < 1) return false;
   const auto e = free_space_map_->test(points, lag);
-  if (e.seen_through >= p.free_space_min_points) track.free_space = e.fraction();
-  return track.free_space >= p.free_space_long_min_fraction;
+  if (e.seen_through >= p.free_space.min_points) track.free_space = e.fraction();
+  return track.free_space >= p.free_space.long_min_fraction;
 }
 
 template <typename PointT>
@@ -560,7 +568,7 @@ std::vector<typename MoverTracker<PointT>::ClusterPart> MoverTracker<PointT>::sp
     const PointCloud& cloud, const std::vector<pcl::PointIndices>& clusters, double time) const {
   const auto& p = parameters_;
   std::vector<ClusterPart> parts;
-  if (!p.split_merged || !has_time_ || p.mode == "centroid") return parts;
+  if (!p.track.split_merged || !has_time_ || p.track.mode == "centroid") return parts;
   // Tracks that can claim: established, seen in the last frame, with a view.
   struct Claimant {
     std::size_t track;
@@ -571,7 +579,7 @@ std::vector<typename MoverTracker<PointT>::ClusterPart> MoverTracker<PointT>::sp
   for (std::size_t ti = 0; ti < tracks_.size(); ++ti) {
     const Track& t = tracks_[ti];
     // Coasting for a frame or two (the walker hidden behind the one it passes) still claims.
-    if (t.missed > 2 || t.large || t.hits < p.mover_min_age || t.last_view.empty()) continue;
+    if (t.missed > 2 || t.large || t.hits < p.decision.min_age || t.last_view.empty()) continue;
     Claimant c;
     c.track = ti;
     c.shift = (t.filter.velocity() * std::max(0.0, time - t.last_time)).template cast<float>();
@@ -581,7 +589,7 @@ std::vector<typename MoverTracker<PointT>::ClusterPart> MoverTracker<PointT>::sp
       c.lo = c.lo.cwiseMin(q.template head<2>() + c.shift);
       c.hi = c.hi.cwiseMax(q.template head<2>() + c.shift);
     }
-    c.fit = fitVelocity(t.history, p.registration_sigma);
+    c.fit = fitVelocity(t.history, p.track.registration_sigma);
     claimants.push_back(c);
   }
   if (claimants.size() < 2 ||
@@ -601,14 +609,14 @@ std::vector<typename MoverTracker<PointT>::ClusterPart> MoverTracker<PointT>::sp
     // The other one a confirmed mover too, or static: an unconfirmed moving track next to a
     // mover is usually a fragment of it (KITTI van) whose velocity has drifted.
     const auto settled = [&](const Claimant& c) {
-      return tracks_[c.track].confirmed || c.fit.velocity.norm() < 0.5 * p.mover_speed;
+      return tracks_[c.track].confirmed || c.fit.velocity.norm() < 0.5 * p.decision.speed;
     };
     if (!settled(a) || !settled(b)) return false;
     const double dv = (a.fit.velocity - b.fit.velocity).norm();
     const double sigma = std::sqrt(a.fit.sigma_v * a.fit.sigma_v + b.fit.sigma_v * b.fit.sigma_v);
-    return dv >= p.split_min_speed_difference && dv > p.gate_sigmas * sigma;
+    return dv >= p.track.split_min_speed_difference && dv > p.track.gate_sigmas * sigma;
   };
-  const float claim = static_cast<float>(p.split_claim_distance);
+  const float claim = static_cast<float>(p.track.split_claim_distance);
   const float claim2 = claim * claim;
   // (index into `ids`, squared distance) of the claimant among `ids` whose moved view lies
   // nearest to q in the horizontal plane.
@@ -647,7 +655,7 @@ std::vector<typename MoverTracker<PointT>::ClusterPart> MoverTracker<PointT>::sp
     }
     near.clear();
     // Structures longer than any mover are not split (and would cost the most to test).
-    const bool mover_sized = (hi - lo).maxCoeff() <= p.max_mover_length + 2 * claim;
+    const bool mover_sized = (hi - lo).maxCoeff() <= p.decision.max_length + 2 * claim;
     for (std::size_t k = 0; mover_sized && k < claimants.size(); ++k) {
       const auto& cl = claimants[k];
       if ((cl.lo.array() - claim <= hi.array()).all() &&
@@ -729,7 +737,8 @@ template <typename PointT>
 double MoverTracker<PointT>::standingHeight(const ClusterFeatures& f) const {
   // A cluster whose lower part a nearer object hides (a walker's head above a parked car) may
   // reach down to that object's lowest point: measured from there for the mover height test.
-  if (!parameters_.standing_height_from_occluder || !std::isfinite(f.floor_z)) return f.height;
+  if (!parameters_.decision.standing_height_from_occluder || !std::isfinite(f.floor_z))
+    return f.height;
   return std::max(f.height, f.max_z - std::min(f.min_z, f.floor_z));
 }
 
@@ -739,9 +748,9 @@ bool MoverTracker<PointT>::besideMover(const Track& track) const {
   for (const Track& u : tracks_) {
     // Moving, confirmed or not yet: the two are decided in the same update, in either order.
     const bool moving =
-        u.mover || u.confirmed || u.filter.velocity().norm() > parameters_.mover_speed;
+        u.mover || u.confirmed || u.filter.velocity().norm() > parameters_.decision.speed;
     if (u.id == track.id || u.large || !moving) continue;
-    if ((u.filter.position() - at).norm() < 0.5 * u.max_length + parameters_.gate_margin)
+    if ((u.filter.position() - at).norm() < 0.5 * u.max_length + parameters_.track.gate_margin)
       return true;
   }
   return false;
@@ -770,7 +779,7 @@ void MoverTracker<PointT>::decideMover(Track& track,
   track.mover = false;
   track.reason = MoverReason::kLarge;
   if (track.large) return;
-  if (track.confirmed && p.mover_latch) {
+  if (track.confirmed && p.decision.latch) {
     track.mover = true;
     track.reason = MoverReason::kLatched;
     return;
@@ -792,7 +801,8 @@ void MoverTracker<PointT>::decideMover(Track& track,
     free_now = (fast_now && freeSpaceEvidence(track, points)) ||
                (slow_now && slowFreeSpaceEvidence(track, points));
     track.free_votes.push_back(free_now ? 1 : 0);
-    while (static_cast<int>(track.free_votes.size()) > p.mover_window) track.free_votes.pop_front();
+    while (static_cast<int>(track.free_votes.size()) > p.decision.window)
+      track.free_votes.pop_front();
   }
   // Motion determined beyond doubt by the positions so far skips the vote count and the minimum
   // age, which only exist to average out noisy velocities (see wellMeasuredMotion()).
@@ -802,20 +812,21 @@ void MoverTracker<PointT>::decideMover(Track& track,
   // 20 still updates passed the significance test). And the free-space evidence must come from
   // this update's view: tests stay in free_votes for up to mover_window fast updates, which can be
   // seconds apart, while the significance test concerns the motion of the last few frames.
-  const bool well_measured = track.hits <= p.mover_window + 1 &&
-                             (free_now || !free_space_map_ || p.free_space_lag <= 0) &&
+  const bool well_measured = track.hits <= p.decision.window + 1 &&
+                             (free_now || !free_space_map_ || p.free_space.lag <= 0) &&
                              wellMeasuredMotion(track);
   track.reason = MoverReason::kYoung;
-  if (!well_measured && track.hits < p.mover_min_age) return;
+  if (!well_measured && track.hits < p.decision.min_age) return;
   // The tallest view counts: a cluster's height changes with the view (a van seen from straight
   // behind showed 0.7-0.9 m and its decision flickered around min_mover_height).
   // A view hidden from below counts down to the object hiding it (standingHeight()), unless a
   // moving object is beside it: then it is more likely that object's own upper part, cut off by
   // its nearer lower body (urban cars, the KITTI van: such fragments became movers with the
   // velocity of their sliding centroid).
-  const bool seen_standing_only = track.max_height < p.min_mover_height;
+  const bool seen_standing_only = track.max_height < p.decision.min_height;
   track.reason = MoverReason::kLow;
-  if (seen_standing_only && (track.max_standing_height < p.min_mover_height || besideMover(track)))
+  if (seen_standing_only &&
+      (track.max_standing_height < p.decision.min_height || besideMover(track)))
     return;
   const bool fast = fastMotion(track, seen_standing_only, well_measured);
   track.reason = MoverReason::kNoMotion;
@@ -824,18 +835,19 @@ void MoverTracker<PointT>::decideMover(Track& track,
   // free_space_votes tests with evidence are needed, within the last mover_window tests.
   int free_votes = 0;
   for (const char f : track.free_votes) free_votes += f;
-  const int free_needed =
-      well_measured ? std::min(p.confirm_free_space_votes, p.free_space_votes) : p.free_space_votes;
+  const int free_needed = well_measured
+                              ? std::min(p.decision.confirm_free_space_votes, p.free_space.votes)
+                              : p.free_space.votes;
   track.reason = MoverReason::kNoFreeSpace;
-  if (free_space_map_ && p.free_space_lag > 0 && free_votes < free_needed) return;
+  if (free_space_map_ && p.free_space.lag > 0 && free_votes < free_needed) return;
   track.mover = true;
-  track.reason = !fast                                           ? MoverReason::kSustained
-                 : well_measured && track.hits < p.mover_min_age ? MoverReason::kWellMeasured
-                                                                 : MoverReason::kFast;
+  track.reason = !fast                                              ? MoverReason::kSustained
+                 : well_measured && track.hits < p.decision.min_age ? MoverReason::kWellMeasured
+                                                                    : MoverReason::kFast;
   // Latch only after a steady run of positive decisions: a brief false confirmation (a cluster
   // that jumped to another object) must not become a mover for the rest of the track's life.
   track.mover_run = run + 1;
-  if (track.mover_run >= p.mover_window) track.confirmed = true;
+  if (track.mover_run >= p.decision.window) track.confirmed = true;
 }
 
 template <typename PointT>
@@ -845,7 +857,7 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
                                   const std::vector<std::uint8_t>& occluded,
                                   const std::vector<double>& floor_z) {
   const auto& p = parameters_;
-  const bool use_registration = p.mode != "centroid";
+  const bool use_registration = p.track.mode != "centroid";
   results_.assign(clusters.size(), ClusterResult());
   registrations_ = 0;
   const double dt = has_time_ ? std::max(0.0, time - last_time_) : 0.0;
@@ -871,11 +883,11 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     // bit: with the value 2 it once shared, a cluster whose right side was occluded was tracked
     // down to kMinSplitPoints too.
     const std::uint8_t flag = occluded.size() == clusters.size() ? occluded[c] : 0;
-    cand.usable = (cand.features.points >= p.min_cluster_points ||
+    cand.usable = (cand.features.points >= p.segment.min_cluster_points ||
                    ((flag & kSplitPart) && cand.features.points >= kMinSplitPoints)) &&
-                  range <= p.max_range;
-    cand.features.large =
-        cand.features.length > p.max_mover_length || cand.features.height > p.max_mover_height;
+                  range <= p.track.max_range;
+    cand.features.large = cand.features.length > p.decision.max_length ||
+                          cand.features.height > p.decision.max_height;
     cand.features.occluded = flag != 0;
     if (floor_z.size() == clusters.size()) cand.features.floor_z = floor_z[c];
     results_[c].features = cand.features;
@@ -885,12 +897,12 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
   // usable cluster has a centroid that moved as little as the (near zero) prediction says, and no
   // other cluster is within static_clearance. cheap[ti] is that cluster (-1: register as usual).
   std::vector<int> cheap(tracks_.size(), -1);
-  if (use_registration && p.static_refresh_frames > 1) {
+  if (use_registration && p.track.static_refresh_frames > 1) {
     for (std::size_t ti = 0; ti < tracks_.size(); ++ti) {
       const Track& track = tracks_[ti];
-      if (!track.model || track.hits < p.mover_min_age || track.mover ||
-          track.filter.speed() > 0.5 * p.mover_speed ||
-          track.since_registration + 1 >= p.static_refresh_frames)
+      if (!track.model || track.hits < p.decision.min_age || track.mover ||
+          track.filter.speed() > 0.5 * p.decision.speed ||
+          track.since_registration + 1 >= p.track.static_refresh_frames)
         continue;
       double nearest = std::numeric_limits<double>::max(), second = nearest;
       int nearest_cluster = -1;
@@ -907,10 +919,10 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
           second = d;
         }
       }
-      if (nearest_cluster < 0 || !(nearest < p.static_shift)) continue;
+      if (nearest_cluster < 0 || !(nearest < p.track.static_shift)) continue;
       // Another cluster this close would make the association ambiguous: register then.
-      if (second <= p.static_clearance) continue;
-      if (second <= 2 * p.gate_margin) {
+      if (second <= p.track.static_clearance) continue;
+      if (second <= 2 * p.track.gate_margin) {
         // A neighbour within the old two-gate-margin bound (it was always registered then): the
         // cluster must also have kept its size, so a split or merge with that neighbour (which
         // moves the centroid little when the other part is small) is registered.
@@ -930,7 +942,7 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
   std::vector<Match> matches;
   std::vector<double> held_distance(tracks_.size(), std::numeric_limits<double>::max());
   std::vector<int> held_cluster(tracks_.size(), -1);
-  const double accel_term = 0.5 * p.acceleration_limit * dt * dt;
+  const double accel_term = 0.5 * p.track.acceleration_limit * dt * dt;
   std::vector<std::pair<double, std::size_t>> to_register;  // (centroid distance, cluster)
   // Tracks seen in the last frame are scored first; a cluster one of them matched with
   // B ≥ registration_stop_similarity (or saw unregistered, static) is "claimed". A coasting
@@ -948,17 +960,18 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
   for (const std::size_t ti : order) {
     const Track& track = tracks_[ti];
     const bool skip_claimed = track.missed > 0 && !track.mover && !track.confirmed &&
-                              track.filter.speed() < 0.5 * p.mover_speed;
+                              track.filter.speed() < 0.5 * p.decision.speed;
     const Eigen::Vector2d predicted = track.filter.position();
     const double meas_sigma =
-        track.large || !use_registration ? p.centroid_sigma : p.registration_sigma;
+        track.large || !use_registration ? p.track.centroid_sigma : p.track.registration_sigma;
     const Eigen::Matrix2d S =
         track.filter.innovationCovariance(Eigen::Matrix2d::Identity() * meas_sigma * meas_sigma);
     const double sigma = std::sqrt(
         std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(S, Eigen::EigenvaluesOnly)
                           .eigenvalues()
                           .maxCoeff()));
-    const double search = std::min(p.max_gate_radius, p.gate_sigmas * sigma + accel_term);
+    const double search =
+        std::min(p.track.max_gate_radius, p.track.gate_sigmas * sigma + accel_term);
     // Gated candidates that need a registration, with their centroid distances (see below).
     to_register.clear();
     for (std::size_t c = 0; c < candidates.size(); ++c) {
@@ -968,7 +981,7 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
       // the mover height is used so that a vehicle whose visible height fluctuates around
       // min_mover_height keeps its registered track.
       const bool cand_registrable =
-          !cand.features.large && cand.features.height >= 0.5 * p.min_mover_height;
+          !cand.features.large && cand.features.height >= 0.5 * p.decision.min_height;
       // Centroids are compared with the predicted centroid, not the predicted reference point:
       // a car first seen head-on at 80 m has its reference point at its front, 1.5-2 m from the
       // centroid of its side view when it passes (open scene: the track was lost and re-born).
@@ -980,7 +993,7 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
         // But a confirmed mover may hold it (see "held" below): a walker passing behind a
         // parked car shows only its head and shoulders, too low to register.
         if (track.confirmed && !cand.features.large &&
-            distance <= std::min(p.max_gate_radius, search) + p.gate_margin &&
+            distance <= std::min(p.track.max_gate_radius, search) + p.track.gate_margin &&
             distance < held_distance[ti]) {
           held_distance[ti] = distance;
           held_cluster[ti] = static_cast<int>(c);
@@ -991,8 +1004,8 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
       // Big structures: their centroid moves a lot as they come into view, gate generously.
       const double margin = centroid_only && (track.large || cand.features.large)
                                 ? 0.5 * std::max(track.features.length, cand.features.length)
-                                : p.gate_margin;
-      const double gate = std::min(p.max_gate_radius + margin, search + margin);
+                                : p.track.gate_margin;
+      const double gate = std::min(p.track.max_gate_radius + margin, search + margin);
       if (distance > gate) continue;
       if (std::abs(cand.features.centroid.z() - track.features.centroid.z()) > 1.5) continue;
       Match m;
@@ -1037,11 +1050,11 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
       // have to cover every possible speed. Its centroid shift is a good enough first guess
       // for a small search window instead.
       Eigen::Vector2d guess = predicted;
-      double radius = std::max(search, 2 * p.density_resolution);
+      double radius = std::max(search, 2 * p.registration.resolution);
       if (track.hits < 2) {
         guess = track.history.back().template head<2>() +
                 (cand.features.centroid - track.features.centroid).template head<2>();
-        radius = p.young_search_radius;
+        radius = p.registration.young_search_radius;
       }
       if (!registerCandidate(track, cand, guess, radius, sensor_origin, m)) {
         // Remember the nearest gated candidate a confirmed mover failed to register (turning,
@@ -1052,7 +1065,7 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
         }
         continue;
       }
-      const bool confident = m.similarity >= p.registration_stop_similarity;
+      const bool confident = m.similarity >= p.registration.stop_similarity;
       if (confident && track.missed == 0) claimed[c] = 1;
       matches.push_back(std::move(m));
       // A fragment of the object (a walker's legs cut from the body by a dropped row) can match
@@ -1068,7 +1081,7 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
             [](const Match& a, const Match& b) { return a.score > b.score; });
   std::vector<char> track_used(tracks_.size(), 0), cluster_used(candidates.size(), 0);
   const float half_life_weight =
-      SurfaceDensity::halfLifeWeight(static_cast<float>(p.model_half_life));
+      SurfaceDensity::halfLifeWeight(static_cast<float>(p.registration.model_half_life));
   for (const auto& m : matches) {
     if (track_used[m.track] || cluster_used[m.cluster]) continue;
     track_used[m.track] = cluster_used[m.cluster] = 1;
@@ -1104,24 +1117,25 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     // Far objects are sampled coarsely and their densities are wide: their positions are less
     // certain, which keeps a few noisy far measurements from producing a confident velocity.
     const double range = (cand.features.centroid - sensor_origin).template head<2>().norm();
-    const double meas_sigma = std::max(registered ? p.registration_sigma : p.centroid_sigma,
-                                       p.measurement_sigma_per_metre * range);
+    const double meas_sigma =
+        std::max(registered ? p.track.registration_sigma : p.track.centroid_sigma,
+                 p.track.measurement_sigma_per_metre * range);
     const Eigen::Vector2d v_before = t.filter.velocity();
     const double since = std::max(1e-3, time - t.last_time);
     t.filter.update(m.measurement.template head<2>(),
                     Eigen::Matrix2d::Identity() * meas_sigma * meas_sigma);
     // Acceleration limit on established tracks: the filter's velocity may not change faster than a
     // vehicle can accelerate (a single bad measurement cannot make a static object a mover).
-    if (t.hits >= p.mover_min_age)
-      limitAcceleration(t.filter, v_before, p.acceleration_limit * since);
+    if (t.hits >= p.decision.min_age)
+      limitAcceleration(t.filter, v_before, p.track.acceleration_limit * since);
     // An occluded view's registered position slides with its visible part (hiding: towards the
     // occluder, emerging: away from it, both towards "no motion"), so while the track's velocity
     // is known from unoccluded views (or inherited on re-acquisition) the reported velocity
     // coasts through up to occluded_skip such updates instead of following the slide.
     const bool velocity_known = t.velocity_filter.isInitialized() &&
-                                (t.unoccluded_updates >= p.mover_min_age || t.reacquired);
-    const bool skip_occluded =
-        registered && cand.features.occluded && velocity_known && t.occluded_run < p.occluded_skip;
+                                (t.unoccluded_updates >= p.decision.min_age || t.reacquired);
+    const bool skip_occluded = registered && cand.features.occluded && velocity_known &&
+                               t.occluded_run < p.track.occluded_skip;
     if (registered) {
       t.occluded_run = cand.features.occluded ? t.occluded_run + 1 : 0;
       if (!cand.features.occluded) ++t.unoccluded_updates;
@@ -1153,9 +1167,10 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     // Not latched: a far vehicle merged with a hedge for a while must become a candidate again.
     t.large = cand.features.large;
     t.history.emplace_back(m.measurement.x(), m.measurement.y(), time);
-    while (static_cast<int>(t.history.size()) > p.mover_window + 1) t.history.pop_front();
+    while (static_cast<int>(t.history.size()) > p.decision.window + 1) t.history.pop_front();
     t.long_history.emplace_back(m.measurement.x(), m.measurement.y(), time);
-    while (!t.long_history.empty() && t.long_history.front().z() < time - p.slow_window - 1e-6)
+    while (!t.long_history.empty() &&
+           t.long_history.front().z() < time - p.decision.slow_window - 1e-6)
       t.long_history.pop_front();
     // The first run of kUnoccludedFitPositions consecutive unoccluded registered positions.
     bool unoccluded_fit_ready = false;
@@ -1168,15 +1183,15 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
             static_cast<int>(t.unoccluded_positions.size()) == kUnoccludedFitPositions;
       }
     }
-    if (p.velocity_fit_init && registered && t.hits == 3 && !t.reacquired) {
+    if (p.track.velocity_fit_init && registered && t.hits == 3 && !t.reacquired) {
       // A young track's Kalman velocity converges slowly: its birth position carries
       // registration_sigma while later positions carry the range-scaled σ, so the filter stays
       // anchored on the birth position (a car at 80 m took 10+ frames). At the third
       // registration the filter restarts from the least-squares line through the three
       // positions, with that line's covariance (σ as in the updates, or the scatter if larger).
       restartFromLine(t, fitVelocity(t.history, meas_sigma), time);
-    } else if (p.velocity_fit_init && unoccluded_fit_ready && t.seen_occluded && !t.reacquired &&
-               t.unoccluded_updates == kUnoccludedFitPositions) {
+    } else if (p.track.velocity_fit_init && unoccluded_fit_ready && t.seen_occluded &&
+               !t.reacquired && t.unoccluded_updates == kUnoccludedFitPositions) {
       // That line went through occluded views, whose positions slide with the visible part
       // towards "no motion" (urban car 4 emerging past a building corner at 8 m/s: 3.0 m/s from
       // the line, then 7 frames to reach 6.7 m/s, where it coasted through the next occlusion).
@@ -1185,7 +1200,7 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
       restartFromLine(t, fitVelocity(t.unoccluded_positions, meas_sigma), time);
     }
     if (cand.features.occluded) t.seen_occluded = true;
-    if (p.fast_from_fit && registered) {
+    if (p.decision.fast_from_fit && registered) {
       // Fast only when a straight line fits the measured positions of the window with a speed
       // above the threshold and well above its uncertainty, the uncertainty taken from the
       // scatter of the positions about that line (at least the measurement σ). The Kalman
@@ -1195,11 +1210,11 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
       // the vote from noisy ones. Centroid measurements (centroid mode, large structures) keep the
       // Kalman test: with their 0.3 m σ floor a 6-position line cannot tell a walker (σ_v 0.7
       // m/s), where the filter's longer memory can (centroid-mode walkers were lost).
-      const double floor = p.registration_sigma;
+      const double floor = p.track.registration_sigma;
       const LineFit fit = fitVelocity(t.history, floor);
       const double speed = fit.velocity.norm();
-      t.fast.push_back(fit.valid && speed > p.mover_speed &&
-                       speed > p.mover_speed_sigmas * fit.sigma_v);
+      t.fast.push_back(fit.valid && speed > p.decision.speed &&
+                       speed > p.decision.speed_sigmas * fit.sigma_v);
     } else {
       // Fast only when the speed is above the threshold and well above its own uncertainty.
       const Eigen::Vector2d v = t.filter.velocity();
@@ -1209,9 +1224,10 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
         sigma_v = std::sqrt(
             std::max(0.0, v.dot(t.filter.getCovariance().template bottomRightCorner<2, 2>() * v)) /
             (speed * speed));
-      t.fast.push_back(speed > p.mover_speed && speed > p.mover_speed_sigmas * sigma_v ? 1 : 0);
+      t.fast.push_back(speed > p.decision.speed && speed > p.decision.speed_sigmas * sigma_v ? 1
+                                                                                             : 0);
     }
-    while (static_cast<int>(t.fast.size()) > p.mover_window) t.fast.pop_front();
+    while (static_cast<int>(t.fast.size()) > p.decision.window) t.fast.pop_front();
     if (registered && t.model) {
       try {
         buildView(cand, m.transform, *t.model, sensor_origin);
@@ -1224,7 +1240,7 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     // Its velocity so far came from centroids of a partial view, which jump when the rest of
     // the object appears: the registered track starts afresh (position and age are kept).
     if (use_registration && !t.model && !t.large &&
-        cand.features.height >= 0.5 * p.min_mover_height) {
+        cand.features.height >= 0.5 * p.decision.min_height) {
       ensurePoints(*cloud, clusters[m.cluster], candidates[m.cluster]);
       t.model = makeModel(candidates[m.cluster], sensor_origin);
       // A re-acquired track keeps the velocity it inherited, not what its filter made of the
@@ -1236,10 +1252,11 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
       const bool keep_velocity = t.reacquired || t.confirmed;
       const Eigen::Vector2d v_keep =
           t.reacquired ? t.inherited_velocity : Eigen::Vector2d(t.filter.velocity());
-      t.filter.initialize(cand.features.centroid.template head<2>(),
-                          Eigen::Matrix2d::Identity() * meas_sigma * meas_sigma,
-                          keep_velocity ? v_keep : Eigen::Vector2d::Zero(),
-                          keep_velocity ? p.reacquire_velocity_sigma : p.initial_velocity_sigma);
+      t.filter.initialize(
+          cand.features.centroid.template head<2>(),
+          Eigen::Matrix2d::Identity() * meas_sigma * meas_sigma,
+          keep_velocity ? v_keep : Eigen::Vector2d::Zero(),
+          keep_velocity ? p.track.reacquire_velocity_sigma : p.track.initial_velocity_sigma);
       t.centroid_offset.setZero();
       t.velocity_filter = KalmanFilterCV();
       t.registered.clear();
@@ -1253,7 +1270,7 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
       t.long_history = t.history;
     }
     std::vector<Eigen::Vector3f> world_points;
-    if (free_space_map_ && p.free_space_lag > 0 && !t.large) {
+    if (free_space_map_ && p.free_space.lag > 0 && !t.large) {
       ensurePoints(*cloud, clusters[m.cluster], candidates[m.cluster]);
       const auto& pts = *candidates[m.cluster].points;
       world_points.reserve(pts.size());
@@ -1270,7 +1287,7 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     }
     if (!world_points.empty()) {
       t.past_points.push_back(std::move(world_points));
-      while (static_cast<int>(t.past_points.size()) > p.free_space_lag + 1)
+      while (static_cast<int>(t.past_points.size()) > p.free_space.lag + 1)
         t.past_points.pop_front();
     }
     r.track_id = t.id;
@@ -1285,12 +1302,12 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
   // Kalman update, no model accumulation, the track coasts), but a cluster nobody else took near
   // its prediction is reported as that track instead of starting a new one. Otherwise each such
   // frame would be a missed mover plus a fresh unconfirmed track, and identities would churn.
-  if (p.hold_confirmed) {
+  if (p.track.hold_confirmed) {
     for (std::size_t ti = 0; ti < tracks_.size(); ++ti) {
       const int c = held_cluster[ti];
       if (track_used[ti] || c < 0 || cluster_used[c]) continue;
       Track& t = tracks_[ti];
-      if (t.missed + 1 > p.max_missed_frames) continue;  // dies now: let the cluster be born
+      if (t.missed + 1 > p.track.max_missed_frames) continue;  // dies now: let the cluster be born
       track_used[ti] = 1;
       cluster_used[c] = 1;
       ++t.missed;  // still coasting: deleted after max_missed_frames without a real update
@@ -1311,7 +1328,7 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     Track& t = tracks_[ti];
     if (!track_used[ti]) ++t.missed;
     // A track seen only once is likely clutter: it does not coast.
-    if (t.missed > p.max_missed_frames || (t.hits < 2 && t.missed > 1)) continue;
+    if (t.missed > p.track.max_missed_frames || (t.hits < 2 && t.missed > 1)) continue;
     kept.push_back(std::move(t));
   }
   tracks_ = std::move(kept);
@@ -1321,12 +1338,12 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
   for (std::size_t c = 0; c < candidates.size(); ++c) {
     auto& cand = candidates[c];
     if (cluster_used[c] || !cand.usable) continue;
-    if (static_cast<int>(tracks_.size()) >= p.max_tracks) break;
+    if (static_cast<int>(tracks_.size()) >= p.track.max_tracks) break;
     Track t;
     t.id = next_id_++;
-    t.filter.setAccelerationNoise(p.acceleration_noise);
-    const double sigma =
-        cand.features.large || !use_registration ? p.centroid_sigma : p.registration_sigma;
+    t.filter.setAccelerationNoise(p.track.acceleration_noise);
+    const double sigma = cand.features.large || !use_registration ? p.track.centroid_sigma
+                                                                  : p.track.registration_sigma;
     // Re-acquisition after occlusion: a mover that passed behind an occluder comes back as a
     // cluster its track cannot take (another part of the object, far from the predicted
     // centroid, or one that does not register against the model of the part seen before). Its
@@ -1335,11 +1352,12 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     // and re-born four times). The coasting mover's prediction says where that object is and how
     // fast it goes: a cluster overlapping its predicted extent inherits its velocity.
     Eigen::Vector2d v0 = Eigen::Vector2d::Zero();
-    double v0_sigma = p.initial_velocity_sigma;
+    double v0_sigma = p.track.initial_velocity_sigma;
     // Registration mode only: centroid mode's speed votes read the tracking filter's velocity,
     // which an inherited velocity would vote for without any evidence (centroid urban: 2 → 8
     // false alarms).
-    if (p.reacquire_velocity && use_registration && p.fast_from_fit && !cand.features.large) {
+    if (p.track.reacquire_velocity && use_registration && p.decision.fast_from_fit &&
+        !cand.features.large) {
       double best = std::numeric_limits<double>::max();
       for (std::size_t ti = 0; ti < existing; ++ti) {
         const Track& lost = tracks_[ti];
@@ -1348,7 +1366,7 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
         // the hiding rear) is a second part of it, not a new object at rest. Not a latched mover
         // standing still: a van turning past a car waiting at the junction took its zero velocity.
         const bool split_by_occluder = cand.features.occluded && lost.confirmed &&
-                                       lost.reportedVelocity().norm() > p.mover_speed;
+                                       lost.reportedVelocity().norm() > p.decision.speed;
         if ((lost.missed < 1 && !split_by_occluder) || lost.large ||
             !(lost.mover || lost.confirmed))
           continue;
@@ -1358,11 +1376,11 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
         // The cluster may be another part of the object than the one last seen (the front
         // emerging on one side of the occluder after the rear hid on the other).
         const double reach = std::max(lost.max_length, lost.features.length) +
-                             0.5 * cand.features.length + p.gate_margin;
+                             0.5 * cand.features.length + p.track.gate_margin;
         if (d <= reach && d < best) {
           best = d;
           v0 = lost.reportedVelocity();
-          v0_sigma = p.reacquire_velocity_sigma;
+          v0_sigma = p.track.reacquire_velocity_sigma;
           t.reacquired = true;
           t.inherited_velocity = v0;
         }
@@ -1382,7 +1400,7 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     t.seen_occluded = cand.features.occluded;
     t.history.emplace_back(cand.features.centroid.x(), cand.features.centroid.y(), time);
     t.long_history = t.history;
-    if (use_registration && !t.large && cand.features.height >= 0.5 * p.min_mover_height) {
+    if (use_registration && !t.large && cand.features.height >= 0.5 * p.decision.min_height) {
       ensurePoints(*cloud, clusters[c], cand);
       t.model = makeModel(cand, sensor_origin);
     }
