@@ -813,8 +813,7 @@ InputFrame readFolderFrame(const pcl_movers::io::SequenceReader& reader, std::si
 
 /** The Velodyne model of --sensor (auto: from the capture's first data packet). */
 pcl_movers::io::VelodyneModel velodyneModelOf(const Options& o) {
-  if (o.params.sensor == "auto") return pcl_movers::io::detectVelodyneModel(o.pcap);
-  return pcl_movers::io::velodyneModelFromName(o.params.sensor);
+  return pcl_movers::io::velodyneModelFor(o.params.sensor, o.pcap);
 }
 
 /** --poses for a capture's sweeps: one per sweep (kitti, kitti-camera) or by time (tum). */

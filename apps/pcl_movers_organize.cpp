@@ -135,8 +135,7 @@ void writeAtomically(const std::string& path, const Cloud& cloud, OutputGuard& g
 int runCapture(const Options& opt, const std::string& output, bool columns_given) {
   pcl_movers::io::VelodyneModel model;
   try {
-    model = opt.sensor == "auto" ? pcl_movers::io::detectVelodyneModel(opt.pcap)
-                                 : pcl_movers::io::velodyneModelFromName(opt.sensor);
+    model = pcl_movers::io::velodyneModelFor(opt.sensor, opt.pcap);
   } catch (const InputError& e) {
     if (opt.sensor == "auto") throw;
     throw InputError(std::string("--sensor: ") + e.what());

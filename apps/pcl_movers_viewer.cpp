@@ -548,8 +548,7 @@ void loadCapture(const ViewerParameters& p, SceneData& scene) {
   if (!fs::is_regular_file(p.pcap, ec))
     throw InputError(p.pcap, 0,
                      fs::exists(p.pcap, ec) ? "--pcap: not a file" : "--pcap: does not exist");
-  const auto model = p.sensor_name == "auto" ? io::detectVelodyneModel(p.pcap)
-                                             : io::velodyneModelFromName(p.sensor_name);
+  const auto model = io::velodyneModelFor(p.sensor_name, p.pcap);
   const std::size_t last =
       p.frames.empty() ? SIZE_MAX : viz::parseFrameRange(p.frames, SIZE_MAX).last;
   scene.source.openCapture(p.pcap, model, p.calibration, last);

@@ -374,6 +374,69 @@ class MoverTracker {
     bool cheap = false;  ///< static track seen without registration
   };
 
+  /** \brief What the steps of one update() share. */
+  struct Frame {
+    const PointCloud& cloud;                         ///< the clusters' points, world frame
+    const std::vector<pcl::PointIndices>& clusters;  ///< this frame's clusters
+    Eigen::Vector3d sensor_origin;                   ///< world frame
+    double time;                                     ///< frame time [s]
+    double dt;                                       ///< since the last frame [s]
+    bool use_registration;                           ///< registration mode (else centroid)
+  };
+  /** \brief One frame's association: every gated (track, cluster) pair with its score, best
+   * first, and per track the nearest cluster a confirmed mover could hold (hold_confirmed). */
+  struct Association {
+    std::vector<Match> matches;
+    std::vector<double> held_distance;
+    std::vector<int> held_cluster;  ///< -1: none
+  };
+
+  // The steps of update(), in order.
+  /** \brief Moves every track's filters `dt` seconds ahead. */
+  void predictTracks(double dt);
+  /** \brief One candidate per cluster: its features and whether it can be tracked. */
+  std::vector<Candidate> makeCandidates(const Frame& frame,
+                                        const std::vector<std::uint8_t>& occluded,
+                                        const std::vector<double>& floor_z);
+  /** \brief Per track, the cluster an established static track is seen in without registration
+   * this frame (static_refresh_frames), or -1. */
+  std::vector<int> findStillClusters(const Frame& frame,
+                                     const std::vector<Candidate>& candidates) const;
+  /** \brief Gates and scores every track against the candidates (registering where needed),
+   * tracks seen in the last frame first. */
+  Association associate(const Frame& frame, std::vector<Candidate>& candidates,
+                        const std::vector<int>& still);
+  /** \brief The gate and scores of track `ti`; the clusters it matched confidently are
+   * `claimed` (coasting static tracks do not register those). */
+  void gateTrack(std::size_t ti, const Frame& frame, std::vector<Candidate>& candidates,
+                 const std::vector<int>& still, std::vector<char>& claimed,
+                 Association& association);
+  /** \brief A static track seen, unregistered, in its still cluster. */
+  void seeStill(Track& track, const Candidate& candidate, ClusterResult& result);
+  /** \brief Updates the track of match `m` with its cluster: filters, history, model, decision. */
+  void updateTrack(const Match& m, const Frame& frame, std::vector<Candidate>& candidates);
+  /** \brief The speed vote of an update (fast_from_fit: from the line through the registered
+   * positions; else from the Kalman velocity and its covariance). */
+  void voteFast(Track& track, bool registered) const;
+  /** \brief Accumulates a registered view into the track's model, or starts the model of a track
+   * born too low once it is seen tall enough. */
+  void updateModel(Track& track, const Match& m, const Frame& frame,
+                   std::vector<Candidate>& candidates, double meas_sigma);
+  /** \brief The mover decision of an update, then the views later tests need (the last view for
+   * splitting merged clusters, past points for the free-space test). */
+  void decideAndRemember(Track& track, const Match& m, const Frame& frame,
+                         std::vector<Candidate>& candidates);
+  /** \brief Confirmed movers that got no update keep a cluster nobody took near them. */
+  void holdClusters(const Association& association, const std::vector<Candidate>& candidates,
+                    std::vector<char>& track_used, std::vector<char>& cluster_used);
+  /** \brief Coasting tracks missed too long (or seen once and then missed) are deleted. */
+  void dropLostTracks(const std::vector<char>& track_used);
+  /** \brief A new track for every usable cluster no track took. */
+  void bearTracks(const Frame& frame, std::vector<Candidate>& candidates,
+                  const std::vector<char>& cluster_used);
+  /** \brief The output row of a cluster given to `track`. */
+  static void report(const Track& track, double similarity, ClusterResult& result);
+
   /** \brief Registers candidate `c` against track `t`'s model around the predicted position. Fills
    * the measurement (reference point) and similarity; false when registration found no match. */
   bool registerCandidate(const Track& track, Candidate& candidate, const Eigen::Vector2d& predicted,

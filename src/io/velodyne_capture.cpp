@@ -477,6 +477,10 @@ std::vector<VelodyneSweep> VelodyneCapture::readWithGrabberThread(const std::str
                                     std::make_move_iterator(impl.done_.end()));
 }
 
+VelodyneModel velodyneModelFor(const std::string& name, const std::string& pcap_path) {
+  return name == "auto" ? detectVelodyneModel(pcap_path) : velodyneModelFromName(name);
+}
+
 VelodyneModel detectVelodyneModel(const std::string& pcap_path) {
   PcapReader reader(pcap_path);
   UdpDatagram datagram;

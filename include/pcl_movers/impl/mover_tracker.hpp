@@ -857,47 +857,80 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
                                   const std::vector<std::uint8_t>& occluded,
                                   const std::vector<double>& floor_z) {
   const auto& p = parameters_;
-  const bool use_registration = p.track.mode != "centroid";
   results_.assign(clusters.size(), ClusterResult());
   registrations_ = 0;
   const double dt = has_time_ ? std::max(0.0, time - last_time_) : 0.0;
   has_time_ = true;
   last_time_ = time;
+  const Frame frame{*cloud, clusters, sensor_origin, time, dt, p.track.mode != "centroid"};
 
-  // 1. predict
+  predictTracks(dt);
+  std::vector<Candidate> candidates = makeCandidates(frame, occluded, floor_z);
+  const Association association =
+      associate(frame, candidates, findStillClusters(frame, candidates));
+
+  // Greedy assignment, best score first.
+  std::vector<char> track_used(tracks_.size(), 0), cluster_used(candidates.size(), 0);
+  for (const auto& m : association.matches) {
+    if (track_used[m.track] || cluster_used[m.cluster]) continue;
+    track_used[m.track] = cluster_used[m.cluster] = 1;
+    if (m.cheap)
+      seeStill(tracks_[m.track], candidates[m.cluster], results_[m.cluster]);
+    else
+      updateTrack(m, frame, candidates);
+  }
+  if (p.track.hold_confirmed) holdClusters(association, candidates, track_used, cluster_used);
+  dropLostTracks(track_used);
+  bearTracks(frame, candidates, cluster_used);
+}
+
+template <typename PointT>
+void MoverTracker<PointT>::predictTracks(double dt) {
   for (auto& t : tracks_) {
     t.filter.predict(dt);
     if (t.velocity_filter.isInitialized()) t.velocity_filter.predict(dt);
     ++t.age;
   }
+}
 
-  // Candidates.
-  std::vector<Candidate> candidates(clusters.size());
-  for (std::size_t c = 0; c < clusters.size(); ++c) {
+template <typename PointT>
+std::vector<typename MoverTracker<PointT>::Candidate> MoverTracker<PointT>::makeCandidates(
+    const Frame& frame, const std::vector<std::uint8_t>& occluded,
+    const std::vector<double>& floor_z) {
+  const auto& p = parameters_;
+  std::vector<Candidate> candidates(frame.clusters.size());
+  for (std::size_t c = 0; c < frame.clusters.size(); ++c) {
     auto& cand = candidates[c];
-    cand.features = computeFeatures(*cloud, clusters[c].indices);
+    cand.features = computeFeatures(frame.cloud, frame.clusters[c].indices);
     const double range =
-        (cand.features.centroid.template head<2>() - sensor_origin.template head<2>()).norm();
+        (cand.features.centroid.template head<2>() - frame.sensor_origin.template head<2>()).norm();
     // A part split off a merged cluster (kSplitPart) belongs to an established track: it is
     // tracked down to kMinSplitPoints (a walker half hidden behind the one it passes). Its own
     // bit: with the value 2 it once shared, a cluster whose right side was occluded was tracked
     // down to kMinSplitPoints too.
-    const std::uint8_t flag = occluded.size() == clusters.size() ? occluded[c] : 0;
+    const std::uint8_t flag = occluded.size() == frame.clusters.size() ? occluded[c] : 0;
     cand.usable = (cand.features.points >= p.segment.min_cluster_points ||
                    ((flag & kSplitPart) && cand.features.points >= kMinSplitPoints)) &&
                   range <= p.track.max_range;
     cand.features.large = cand.features.length > p.decision.max_length ||
                           cand.features.height > p.decision.max_height;
     cand.features.occluded = flag != 0;
-    if (floor_z.size() == clusters.size()) cand.features.floor_z = floor_z[c];
+    if (floor_z.size() == frame.clusters.size()) cand.features.floor_z = floor_z[c];
     results_[c].features = cand.features;
   }
+  return candidates;
+}
 
+template <typename PointT>
+std::vector<int> MoverTracker<PointT>::findStillClusters(
+    const Frame& frame, const std::vector<Candidate>& candidates) const {
+  const auto& p = parameters_;
   // Cheap frames for established static tracks (see static_refresh_frames): the track's nearest
   // usable cluster has a centroid that moved as little as the (near zero) prediction says, and no
   // other cluster is within static_clearance. cheap[ti] is that cluster (-1: register as usual).
   std::vector<int> cheap(tracks_.size(), -1);
-  if (use_registration && p.track.static_refresh_frames > 1) {
+  if (!frame.use_registration || p.track.static_refresh_frames <= 1) return cheap;
+  {
     for (std::size_t ti = 0; ti < tracks_.size(); ++ti) {
       const Track& track = tracks_[ti];
       if (!track.model || track.hits < p.decision.min_age || track.mover ||
@@ -937,13 +970,15 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
       cheap[ti] = nearest_cluster;
     }
   }
+  return cheap;
+}
 
-  // 2.-3. gate and score
-  std::vector<Match> matches;
-  std::vector<double> held_distance(tracks_.size(), std::numeric_limits<double>::max());
-  std::vector<int> held_cluster(tracks_.size(), -1);
-  const double accel_term = 0.5 * p.track.acceleration_limit * dt * dt;
-  std::vector<std::pair<double, std::size_t>> to_register;  // (centroid distance, cluster)
+template <typename PointT>
+typename MoverTracker<PointT>::Association MoverTracker<PointT>::associate(
+    const Frame& frame, std::vector<Candidate>& candidates, const std::vector<int>& still) {
+  Association association;
+  association.held_distance.assign(tracks_.size(), std::numeric_limits<double>::max());
+  association.held_cluster.assign(tracks_.size(), -1);
   // Tracks seen in the last frame are scored first; a cluster one of them matched with
   // B ≥ registration_stop_similarity (or saw unregistered, static) is "claimed". A coasting
   // track that is not a mover does not register claimed clusters: it could only take one with an
@@ -957,354 +992,391 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     for (std::size_t ti = 0; ti < tracks_.size(); ++ti)
       if ((tracks_[ti].missed > 0) == (pass == 1)) order.push_back(ti);
   std::vector<char> claimed(candidates.size(), 0);
-  for (const std::size_t ti : order) {
-    const Track& track = tracks_[ti];
-    const bool skip_claimed = track.missed > 0 && !track.mover && !track.confirmed &&
-                              track.filter.speed() < 0.5 * p.decision.speed;
-    const Eigen::Vector2d predicted = track.filter.position();
-    const double meas_sigma =
-        track.large || !use_registration ? p.track.centroid_sigma : p.track.registration_sigma;
-    const Eigen::Matrix2d S =
-        track.filter.innovationCovariance(Eigen::Matrix2d::Identity() * meas_sigma * meas_sigma);
-    const double sigma = std::sqrt(
-        std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(S, Eigen::EigenvaluesOnly)
-                          .eigenvalues()
-                          .maxCoeff()));
-    const double search =
-        std::min(p.track.max_gate_radius, p.track.gate_sigmas * sigma + accel_term);
-    // Gated candidates that need a registration, with their centroid distances (see below).
-    to_register.clear();
-    for (std::size_t c = 0; c < candidates.size(); ++c) {
-      auto& cand = candidates[c];
-      if (!cand.usable) continue;
-      // Objects far too low to be movers and big structures are not worth a registration. Half
-      // the mover height is used so that a vehicle whose visible height fluctuates around
-      // min_mover_height keeps its registered track.
-      const bool cand_registrable =
-          !cand.features.large && cand.features.height >= 0.5 * p.decision.min_height;
-      // Centroids are compared with the predicted centroid, not the predicted reference point:
-      // a car first seen head-on at 80 m has its reference point at its front, 1.5-2 m from the
-      // centroid of its side view when it passes (open scene: the track was lost and re-born).
-      const double distance =
-          (cand.features.centroid.template head<2>() - predicted - track.centroid_offset).norm();
-      // A track with a model is only ever updated by registration: mixing centroid measurements
-      // into its reference-point track would fake motion.
-      if (use_registration && track.model && !cand_registrable) {
-        // But a confirmed mover may hold it (see "held" below): a walker passing behind a
-        // parked car shows only its head and shoulders, too low to register.
-        if (track.confirmed && !cand.features.large &&
-            distance <= std::min(p.track.max_gate_radius, search) + p.track.gate_margin &&
-            distance < held_distance[ti]) {
-          held_distance[ti] = distance;
-          held_cluster[ti] = static_cast<int>(c);
-        }
-        continue;
-      }
-      const bool centroid_only = !use_registration || track.large || !track.model;
-      // Big structures: their centroid moves a lot as they come into view, gate generously.
-      const double margin = centroid_only && (track.large || cand.features.large)
-                                ? 0.5 * std::max(track.features.length, cand.features.length)
-                                : p.track.gate_margin;
-      const double gate = std::min(p.track.max_gate_radius + margin, search + margin);
-      if (distance > gate) continue;
-      if (std::abs(cand.features.centroid.z() - track.features.centroid.z()) > 1.5) continue;
-      Match m;
-      m.track = ti;
-      m.cluster = c;
-      if (!centroid_only && cheap[ti] >= 0) {
-        // Established static track whose nearest cluster did not move: seen, no registration;
-        // its other gated clusters are left to the other tracks.
-        if (static_cast<int>(c) != cheap[ti]) continue;
-        m.cheap = true;
-        m.measurement = Eigen::Vector3d(predicted.x(), predicted.y(), track.z);
-        m.score = track.similarity;
-        m.similarity = track.similarity;
-      } else if (centroid_only) {
-        m.measurement = cand.features.centroid;
-        m.score = -distance;  // below every B, so registered matches are assigned first
-        m.similarity = 0;
-      } else {
-        if (!(skip_claimed && claimed[c])) to_register.emplace_back(distance, c);
-        continue;
-      }
-      if (m.cheap && track.missed == 0) claimed[c] = 1;
-      matches.push_back(std::move(m));
-    }
-    // Registrations, nearest centroid first. Once one reaches registration_stop_similarity the
-    // farther candidates are not registered: they would have to match the model even better to
-    // win this track, which they rarely do (on KITTI ~1 in 30 of them won, mostly against
-    // fragments of the same object), and the farther candidates are most of the cost where
-    // objects stand close together (parked cars, vegetation).
-    std::stable_sort(to_register.begin(), to_register.end(),
-                     [](const std::pair<double, std::size_t>& a,
-                        const std::pair<double, std::size_t>& b) { return a.first < b.first; });
-    for (const auto& dc : to_register) {
-      const double distance = dc.first;
-      const std::size_t c = dc.second;
-      auto& cand = candidates[c];
-      Match m;
-      m.track = ti;
-      m.cluster = c;
-      ensurePoints(*cloud, clusters[c], cand);
-      // A track seen once has no velocity yet: its prediction is vague and the search would
-      // have to cover every possible speed. Its centroid shift is a good enough first guess
-      // for a small search window instead.
-      Eigen::Vector2d guess = predicted;
-      double radius = std::max(search, 2 * p.registration.resolution);
-      if (track.hits < 2) {
-        guess = track.history.back().template head<2>() +
-                (cand.features.centroid - track.features.centroid).template head<2>();
-        radius = p.registration.young_search_radius;
-      }
-      if (!registerCandidate(track, cand, guess, radius, sensor_origin, m)) {
-        // Remember the nearest gated candidate a confirmed mover failed to register (turning,
-        // half occluded): it may still be that mover (see "held" below).
-        if ((track.confirmed || track.mover) && distance < held_distance[ti]) {
-          held_distance[ti] = distance;
-          held_cluster[ti] = static_cast<int>(c);
-        }
-        continue;
-      }
-      const bool confident = m.similarity >= p.registration.stop_similarity;
-      if (confident && track.missed == 0) claimed[c] = 1;
-      matches.push_back(std::move(m));
-      // A fragment of the object (a walker's legs cut from the body by a dropped row) can match
-      // the model well and lie nearest, and the rest, the better match, would never be tried
-      // (urban pedestrian 6: its track took an 8-point leg part at B 0.88 and the 29-point rest
-      // became a new track). Only a candidate of at least half the last view's points stops.
-      if (confident && 2 * cand.features.points >= track.features.points) break;
-    }
-  }
-
-  // 4. greedy assignment, best score first
-  std::sort(matches.begin(), matches.end(),
+  for (const std::size_t ti : order) gateTrack(ti, frame, candidates, still, claimed, association);
+  std::sort(association.matches.begin(), association.matches.end(),
             [](const Match& a, const Match& b) { return a.score > b.score; });
-  std::vector<char> track_used(tracks_.size(), 0), cluster_used(candidates.size(), 0);
-  const float half_life_weight =
-      SurfaceDensity::halfLifeWeight(static_cast<float>(p.registration.model_half_life));
-  for (const auto& m : matches) {
-    if (track_used[m.track] || cluster_used[m.cluster]) continue;
-    track_used[m.track] = cluster_used[m.cluster] = 1;
-    Track& t = tracks_[m.track];
-    const Candidate& cand = candidates[m.cluster];
-    auto& r = results_[m.cluster];
-    if (m.cheap) {
-      t.missed = 0;
-      t.last_time = time;
-      t.features = cand.features;
-      ++t.since_registration;
-      r.track_id = t.id;
-      r.mover = t.mover;
-      r.reason = t.reason;
-      r.similarity = t.similarity;
-      r.velocity = t.reportedVelocity();
+  return association;
+}
+
+template <typename PointT>
+void MoverTracker<PointT>::gateTrack(std::size_t ti, const Frame& frame,
+                                     std::vector<Candidate>& candidates,
+                                     const std::vector<int>& still, std::vector<char>& claimed,
+                                     Association& association) {
+  const auto& p = parameters_;
+  const double accel_term = 0.5 * p.track.acceleration_limit * frame.dt * frame.dt;
+  std::vector<std::pair<double, std::size_t>> to_register;  // (centroid distance, cluster)
+  const Track& track = tracks_[ti];
+  const bool skip_claimed = track.missed > 0 && !track.mover && !track.confirmed &&
+                            track.filter.speed() < 0.5 * p.decision.speed;
+  const Eigen::Vector2d predicted = track.filter.position();
+  const double meas_sigma =
+      track.large || !frame.use_registration ? p.track.centroid_sigma : p.track.registration_sigma;
+  const Eigen::Matrix2d S =
+      track.filter.innovationCovariance(Eigen::Matrix2d::Identity() * meas_sigma * meas_sigma);
+  const double sigma = std::sqrt(
+      std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(S, Eigen::EigenvaluesOnly)
+                        .eigenvalues()
+                        .maxCoeff()));
+  const double search = std::min(p.track.max_gate_radius, p.track.gate_sigmas * sigma + accel_term);
+  // Gated candidates that need a registration, with their centroid distances (see below).
+  to_register.clear();
+  for (std::size_t c = 0; c < candidates.size(); ++c) {
+    auto& cand = candidates[c];
+    if (!cand.usable) continue;
+    // Objects far too low to be movers and big structures are not worth a registration. Half
+    // the mover height is used so that a vehicle whose visible height fluctuates around
+    // min_mover_height keeps its registered track.
+    const bool cand_registrable =
+        !cand.features.large && cand.features.height >= 0.5 * p.decision.min_height;
+    // Centroids are compared with the predicted centroid, not the predicted reference point:
+    // a car first seen head-on at 80 m has its reference point at its front, 1.5-2 m from the
+    // centroid of its side view when it passes (open scene: the track was lost and re-born).
+    const double distance =
+        (cand.features.centroid.template head<2>() - predicted - track.centroid_offset).norm();
+    // A track with a model is only ever updated by registration: mixing centroid measurements
+    // into its reference-point track would fake motion.
+    if (frame.use_registration && track.model && !cand_registrable) {
+      // But a confirmed mover may hold it (see "held" below): a walker passing behind a
+      // parked car shows only its head and shoulders, too low to register.
+      if (track.confirmed && !cand.features.large &&
+          distance <= std::min(p.track.max_gate_radius, search) + p.track.gate_margin &&
+          distance < association.held_distance[ti]) {
+        association.held_distance[ti] = distance;
+        association.held_cluster[ti] = static_cast<int>(c);
+      }
       continue;
     }
-    const bool registered = m.registered;
-    t.since_registration = 0;
-    if (registered) {
-      // A registration over yaw layers found the object turned (turn_yaw_samples): a vehicle's
-      // velocity turns with its heading, so both filters' velocities turn with it before the
-      // update (the object turned by minus the change of the yaw that maps views onto the model).
-      const double yaw = std::atan2(m.transform(1, 0), m.transform(0, 0));
-      const double turned = -std::remainder(yaw - t.model_yaw, 2 * M_PI);
-      t.model_yaw = yaw;
-      if (turned != 0) {
-        rotateVelocity(t.filter, turned);
-        if (t.velocity_filter.isInitialized()) rotateVelocity(t.velocity_filter, turned);
-      }
-    }
-    // Far objects are sampled coarsely and their densities are wide: their positions are less
-    // certain, which keeps a few noisy far measurements from producing a confident velocity.
-    const double range = (cand.features.centroid - sensor_origin).template head<2>().norm();
-    const double meas_sigma =
-        std::max(registered ? p.track.registration_sigma : p.track.centroid_sigma,
-                 p.track.measurement_sigma_per_metre * range);
-    const Eigen::Vector2d v_before = t.filter.velocity();
-    const double since = std::max(1e-3, time - t.last_time);
-    t.filter.update(m.measurement.template head<2>(),
-                    Eigen::Matrix2d::Identity() * meas_sigma * meas_sigma);
-    // Acceleration limit on established tracks: the filter's velocity may not change faster than a
-    // vehicle can accelerate (a single bad measurement cannot make a static object a mover).
-    if (t.hits >= p.decision.min_age)
-      limitAcceleration(t.filter, v_before, p.track.acceleration_limit * since);
-    // An occluded view's registered position slides with its visible part (hiding: towards the
-    // occluder, emerging: away from it, both towards "no motion"), so while the track's velocity
-    // is known from unoccluded views (or inherited on re-acquisition) the reported velocity
-    // coasts through up to occluded_skip such updates instead of following the slide.
-    const bool velocity_known = t.velocity_filter.isInitialized() &&
-                                (t.unoccluded_updates >= p.decision.min_age || t.reacquired);
-    const bool skip_occluded = registered && cand.features.occluded && velocity_known &&
-                               t.occluded_run < p.track.occluded_skip;
-    if (registered) {
-      t.occluded_run = cand.features.occluded ? t.occluded_run + 1 : 0;
-      if (!cand.features.occluded) ++t.unoccluded_updates;
-    }
-    if (registered && !skip_occluded) {
-      updateVelocityFilter(t, m.measurement, m.similarity, cand.features.occluded, time, range,
-                           since, t.skipped_run > 0);
-      t.skipped_run = 0;
-    } else if (skip_occluded) {
-      if (t.skipped_run++ == 0)
-        t.skip_velocity_covariance =
-            t.velocity_filter.getCovariance().template bottomRightCorner<2, 2>();
-    }
-    t.z = m.measurement.z();
-    t.last_time = time;
-    ++t.hits;
-    // Re-acquired after coasting: the association is the least certain here, so earlier points
-    // may belong to another object; the receding test only uses points from this run of updates.
-    if (t.missed > 0) t.past_points.clear();
-    t.missed = 0;
-    t.similarity = m.similarity;
-    t.features = cand.features;
-    t.centroid_offset = (cand.features.centroid - m.measurement).template head<2>();
-    if (!cand.features.large) {
-      t.max_height = std::max(t.max_height, cand.features.height);
-      t.max_standing_height = std::max(t.max_standing_height, standingHeight(cand.features));
-      t.max_length = std::max(t.max_length, cand.features.length);
-    }
-    // Not latched: a far vehicle merged with a hedge for a while must become a candidate again.
-    t.large = cand.features.large;
-    t.history.emplace_back(m.measurement.x(), m.measurement.y(), time);
-    while (static_cast<int>(t.history.size()) > p.decision.window + 1) t.history.pop_front();
-    t.long_history.emplace_back(m.measurement.x(), m.measurement.y(), time);
-    while (!t.long_history.empty() &&
-           t.long_history.front().z() < time - p.decision.slow_window - 1e-6)
-      t.long_history.pop_front();
-    // The first run of kUnoccludedFitPositions consecutive unoccluded registered positions.
-    bool unoccluded_fit_ready = false;
-    if (registered && static_cast<int>(t.unoccluded_positions.size()) < kUnoccludedFitPositions) {
-      if (cand.features.occluded) {
-        t.unoccluded_positions.clear();
-      } else {
-        t.unoccluded_positions.emplace_back(m.measurement.x(), m.measurement.y(), time);
-        unoccluded_fit_ready =
-            static_cast<int>(t.unoccluded_positions.size()) == kUnoccludedFitPositions;
-      }
-    }
-    if (p.track.velocity_fit_init && registered && t.hits == 3 && !t.reacquired) {
-      // A young track's Kalman velocity converges slowly: its birth position carries
-      // registration_sigma while later positions carry the range-scaled σ, so the filter stays
-      // anchored on the birth position (a car at 80 m took 10+ frames). At the third
-      // registration the filter restarts from the least-squares line through the three
-      // positions, with that line's covariance (σ as in the updates, or the scatter if larger).
-      restartFromLine(t, fitVelocity(t.history, meas_sigma), time);
-    } else if (p.track.velocity_fit_init && unoccluded_fit_ready && t.seen_occluded &&
-               !t.reacquired && t.unoccluded_updates == kUnoccludedFitPositions) {
-      // That line went through occluded views, whose positions slide with the visible part
-      // towards "no motion" (urban car 4 emerging past a building corner at 8 m/s: 3.0 m/s from
-      // the line, then 7 frames to reach 6.7 m/s, where it coasted through the next occlusion).
-      // The third unoccluded view restarts the filters from the line through the unoccluded
-      // positions alone.
-      restartFromLine(t, fitVelocity(t.unoccluded_positions, meas_sigma), time);
-    }
-    if (cand.features.occluded) t.seen_occluded = true;
-    if (p.decision.fast_from_fit && registered) {
-      // Fast only when a straight line fits the measured positions of the window with a speed
-      // above the threshold and well above its uncertainty, the uncertainty taken from the
-      // scatter of the positions about that line (at least the measurement σ). The Kalman
-      // velocity's σ rests on an assumed σ = measurement_sigma_per_metre·range: a pedestrian at
-      // 40 m registered to a few cm (urban) never cleared it (σ_v ≈ 0.65 m/s at 1.3 m/s) and was
-      // confirmed 20 frames late. The scatter credits precise registrations and still withholds
-      // the vote from noisy ones. Centroid measurements (centroid mode, large structures) keep the
-      // Kalman test: with their 0.3 m σ floor a 6-position line cannot tell a walker (σ_v 0.7
-      // m/s), where the filter's longer memory can (centroid-mode walkers were lost).
-      const double floor = p.track.registration_sigma;
-      const LineFit fit = fitVelocity(t.history, floor);
-      const double speed = fit.velocity.norm();
-      t.fast.push_back(fit.valid && speed > p.decision.speed &&
-                       speed > p.decision.speed_sigmas * fit.sigma_v);
+    const bool centroid_only = !frame.use_registration || track.large || !track.model;
+    // Big structures: their centroid moves a lot as they come into view, gate generously.
+    const double margin = centroid_only && (track.large || cand.features.large)
+                              ? 0.5 * std::max(track.features.length, cand.features.length)
+                              : p.track.gate_margin;
+    const double gate = std::min(p.track.max_gate_radius + margin, search + margin);
+    if (distance > gate) continue;
+    if (std::abs(cand.features.centroid.z() - track.features.centroid.z()) > 1.5) continue;
+    Match m;
+    m.track = ti;
+    m.cluster = c;
+    if (!centroid_only && still[ti] >= 0) {
+      // Established static track whose nearest cluster did not move: seen, no registration;
+      // its other gated clusters are left to the other tracks.
+      if (static_cast<int>(c) != still[ti]) continue;
+      m.cheap = true;
+      m.measurement = Eigen::Vector3d(predicted.x(), predicted.y(), track.z);
+      m.score = track.similarity;
+      m.similarity = track.similarity;
+    } else if (centroid_only) {
+      m.measurement = cand.features.centroid;
+      m.score = -distance;  // below every B, so registered matches are assigned first
+      m.similarity = 0;
     } else {
-      // Fast only when the speed is above the threshold and well above its own uncertainty.
-      const Eigen::Vector2d v = t.filter.velocity();
-      const double speed = v.norm();
-      double sigma_v = 0;
-      if (speed > 0)
-        sigma_v = std::sqrt(
-            std::max(0.0, v.dot(t.filter.getCovariance().template bottomRightCorner<2, 2>() * v)) /
-            (speed * speed));
-      t.fast.push_back(speed > p.decision.speed && speed > p.decision.speed_sigmas * sigma_v ? 1
-                                                                                             : 0);
+      if (!(skip_claimed && claimed[c])) to_register.emplace_back(distance, c);
+      continue;
     }
-    while (static_cast<int>(t.fast.size()) > p.decision.window) t.fast.pop_front();
-    if (registered && t.model) {
-      try {
-        buildView(cand, m.transform, *t.model, sensor_origin);
-        t.model->accumulate(view_, half_life_weight);
-      } catch (const std::exception&) {
-        // Grids always match (same parameters); keep the old model if they ever do not.
-      }
-    }
-    // A track born too low (e.g. half hidden) gets its model once it is seen tall enough.
-    // Its velocity so far came from centroids of a partial view, which jump when the rest of
-    // the object appears: the registered track starts afresh (position and age are kept).
-    if (use_registration && !t.model && !t.large &&
-        cand.features.height >= 0.5 * p.decision.min_height) {
-      ensurePoints(*cloud, clusters[m.cluster], candidates[m.cluster]);
-      t.model = makeModel(candidates[m.cluster], sensor_origin);
-      // A re-acquired track keeps the velocity it inherited, not what its filter made of the
-      // partial views' centroids since (a wooded car's front emerging past a trunk: a jump to
-      // another fragment gave it 2 m/s across its path, reported for the next 7 frames).
-      // A mover already confirmed (from views hidden from below, standingHeight()) keeps its
-      // velocity too: it is reported, and restarting it from zero reported a walker emerging
-      // from behind a parked car as standing still for three frames (urban pedestrian 8).
-      const bool keep_velocity = t.reacquired || t.confirmed;
-      const Eigen::Vector2d v_keep =
-          t.reacquired ? t.inherited_velocity : Eigen::Vector2d(t.filter.velocity());
-      t.filter.initialize(
-          cand.features.centroid.template head<2>(),
-          Eigen::Matrix2d::Identity() * meas_sigma * meas_sigma,
-          keep_velocity ? v_keep : Eigen::Vector2d::Zero(),
-          keep_velocity ? p.track.reacquire_velocity_sigma : p.track.initial_velocity_sigma);
-      t.centroid_offset.setZero();
-      t.velocity_filter = KalmanFilterCV();
-      t.registered.clear();
-      t.unoccluded_positions.clear();
-      t.seen_occluded = cand.features.occluded;
-      t.z = cand.features.centroid.z();
-      t.hits = 1;
-      t.fast.assign(1, 0);
-      t.history.assign(
-          1, Eigen::Vector3d(cand.features.centroid.x(), cand.features.centroid.y(), time));
-      t.long_history = t.history;
-    }
-    std::vector<Eigen::Vector3f> world_points;
-    if (free_space_map_ && p.free_space.lag > 0 && !t.large) {
-      ensurePoints(*cloud, clusters[m.cluster], candidates[m.cluster]);
-      const auto& pts = *candidates[m.cluster].points;
-      world_points.reserve(pts.size());
-      for (const auto& q : pts) world_points.emplace_back(q.x, q.y, q.z);
-    }
-    decideMover(t, world_points);
-    if (const auto& pts = candidates[m.cluster].points) {
-      const std::size_t n = pts->size();
-      const std::size_t stride =
-          std::max<std::size_t>(1, (n + kLastViewPoints - 1) / kLastViewPoints);
-      t.last_view.clear();
-      for (std::size_t k = 0; k < n; k += stride)
-        t.last_view.emplace_back((*pts)[k].x, (*pts)[k].y, (*pts)[k].z);
-    }
-    if (!world_points.empty()) {
-      t.past_points.push_back(std::move(world_points));
-      while (static_cast<int>(t.past_points.size()) > p.free_space.lag + 1)
-        t.past_points.pop_front();
-    }
-    r.track_id = t.id;
-    r.mover = t.mover;
-    r.reason = t.reason;
-    r.similarity = t.similarity;
-    r.velocity = t.reportedVelocity();
+    if (m.cheap && track.missed == 0) claimed[c] = 1;
+    association.matches.push_back(std::move(m));
   }
+  // Registrations, nearest centroid first. Once one reaches registration_stop_similarity the
+  // farther candidates are not registered: they would have to match the model even better to
+  // win this track, which they rarely do (on KITTI ~1 in 30 of them won, mostly against
+  // fragments of the same object), and the farther candidates are most of the cost where
+  // objects stand close together (parked cars, vegetation).
+  std::stable_sort(to_register.begin(), to_register.end(),
+                   [](const std::pair<double, std::size_t>& a,
+                      const std::pair<double, std::size_t>& b) { return a.first < b.first; });
+  for (const auto& dc : to_register) {
+    const double distance = dc.first;
+    const std::size_t c = dc.second;
+    auto& cand = candidates[c];
+    Match m;
+    m.track = ti;
+    m.cluster = c;
+    ensurePoints(frame.cloud, frame.clusters[c], cand);
+    // A track seen once has no velocity yet: its prediction is vague and the search would
+    // have to cover every possible speed. Its centroid shift is a good enough first guess
+    // for a small search window instead.
+    Eigen::Vector2d guess = predicted;
+    double radius = std::max(search, 2 * p.registration.resolution);
+    if (track.hits < 2) {
+      guess = track.history.back().template head<2>() +
+              (cand.features.centroid - track.features.centroid).template head<2>();
+      radius = p.registration.young_search_radius;
+    }
+    if (!registerCandidate(track, cand, guess, radius, frame.sensor_origin, m)) {
+      // Remember the nearest gated candidate a confirmed mover failed to register (turning,
+      // half occluded): it may still be that mover (see "held" below).
+      if ((track.confirmed || track.mover) && distance < association.held_distance[ti]) {
+        association.held_distance[ti] = distance;
+        association.held_cluster[ti] = static_cast<int>(c);
+      }
+      continue;
+    }
+    const bool confident = m.similarity >= p.registration.stop_similarity;
+    if (confident && track.missed == 0) claimed[c] = 1;
+    association.matches.push_back(std::move(m));
+    // A fragment of the object (a walker's legs cut from the body by a dropped row) can match
+    // the model well and lie nearest, and the rest, the better match, would never be tried
+    // (urban pedestrian 6: its track took an 8-point leg part at B 0.88 and the 29-point rest
+    // became a new track). Only a candidate of at least half the last view's points stops.
+    if (confident && 2 * cand.features.points >= track.features.points) break;
+  }
+}
 
+template <typename PointT>
+void MoverTracker<PointT>::seeStill(Track& t, const Candidate& cand, ClusterResult& r) {
+  t.missed = 0;
+  t.last_time = last_time_;
+  t.features = cand.features;
+  ++t.since_registration;
+  report(t, t.similarity, r);
+}
+
+template <typename PointT>
+void MoverTracker<PointT>::updateTrack(const Match& m, const Frame& frame,
+                                       std::vector<Candidate>& candidates) {
+  const auto& p = parameters_;
+  Track& t = tracks_[m.track];
+  const Candidate& cand = candidates[m.cluster];
+  auto& r = results_[m.cluster];
+  const bool registered = m.registered;
+  t.since_registration = 0;
+  if (registered) {
+    // A registration over yaw layers found the object turned (turn_yaw_samples): a vehicle's
+    // velocity turns with its heading, so both filters' velocities turn with it before the
+    // update (the object turned by minus the change of the yaw that maps views onto the model).
+    const double yaw = std::atan2(m.transform(1, 0), m.transform(0, 0));
+    const double turned = -std::remainder(yaw - t.model_yaw, 2 * M_PI);
+    t.model_yaw = yaw;
+    if (turned != 0) {
+      rotateVelocity(t.filter, turned);
+      if (t.velocity_filter.isInitialized()) rotateVelocity(t.velocity_filter, turned);
+    }
+  }
+  // Far objects are sampled coarsely and their densities are wide: their positions are less
+  // certain, which keeps a few noisy far measurements from producing a confident velocity.
+  const double range = (cand.features.centroid - frame.sensor_origin).template head<2>().norm();
+  const double meas_sigma =
+      std::max(registered ? p.track.registration_sigma : p.track.centroid_sigma,
+               p.track.measurement_sigma_per_metre * range);
+  const Eigen::Vector2d v_before = t.filter.velocity();
+  const double since = std::max(1e-3, frame.time - t.last_time);
+  t.filter.update(m.measurement.template head<2>(),
+                  Eigen::Matrix2d::Identity() * meas_sigma * meas_sigma);
+  // Acceleration limit on established tracks: the filter's velocity may not change faster than a
+  // vehicle can accelerate (a single bad measurement cannot make a static object a mover).
+  if (t.hits >= p.decision.min_age)
+    limitAcceleration(t.filter, v_before, p.track.acceleration_limit * since);
+  // An occluded view's registered position slides with its visible part (hiding: towards the
+  // occluder, emerging: away from it, both towards "no motion"), so while the track's velocity
+  // is known from unoccluded views (or inherited on re-acquisition) the reported velocity
+  // coasts through up to occluded_skip such updates instead of following the slide.
+  const bool velocity_known = t.velocity_filter.isInitialized() &&
+                              (t.unoccluded_updates >= p.decision.min_age || t.reacquired);
+  const bool skip_occluded = registered && cand.features.occluded && velocity_known &&
+                             t.occluded_run < p.track.occluded_skip;
+  if (registered) {
+    t.occluded_run = cand.features.occluded ? t.occluded_run + 1 : 0;
+    if (!cand.features.occluded) ++t.unoccluded_updates;
+  }
+  if (registered && !skip_occluded) {
+    updateVelocityFilter(t, m.measurement, m.similarity, cand.features.occluded, frame.time, range,
+                         since, t.skipped_run > 0);
+    t.skipped_run = 0;
+  } else if (skip_occluded) {
+    if (t.skipped_run++ == 0)
+      t.skip_velocity_covariance =
+          t.velocity_filter.getCovariance().template bottomRightCorner<2, 2>();
+  }
+  t.z = m.measurement.z();
+  t.last_time = frame.time;
+  ++t.hits;
+  // Re-acquired after coasting: the association is the least certain here, so earlier points
+  // may belong to another object; the receding test only uses points from this run of updates.
+  if (t.missed > 0) t.past_points.clear();
+  t.missed = 0;
+  t.similarity = m.similarity;
+  t.features = cand.features;
+  t.centroid_offset = (cand.features.centroid - m.measurement).template head<2>();
+  if (!cand.features.large) {
+    t.max_height = std::max(t.max_height, cand.features.height);
+    t.max_standing_height = std::max(t.max_standing_height, standingHeight(cand.features));
+    t.max_length = std::max(t.max_length, cand.features.length);
+  }
+  // Not latched: a far vehicle merged with a hedge for a while must become a candidate again.
+  t.large = cand.features.large;
+  t.history.emplace_back(m.measurement.x(), m.measurement.y(), frame.time);
+  while (static_cast<int>(t.history.size()) > p.decision.window + 1) t.history.pop_front();
+  t.long_history.emplace_back(m.measurement.x(), m.measurement.y(), frame.time);
+  while (!t.long_history.empty() &&
+         t.long_history.front().z() < frame.time - p.decision.slow_window - 1e-6)
+    t.long_history.pop_front();
+  // The first run of kUnoccludedFitPositions consecutive unoccluded registered positions.
+  bool unoccluded_fit_ready = false;
+  if (registered && static_cast<int>(t.unoccluded_positions.size()) < kUnoccludedFitPositions) {
+    if (cand.features.occluded) {
+      t.unoccluded_positions.clear();
+    } else {
+      t.unoccluded_positions.emplace_back(m.measurement.x(), m.measurement.y(), frame.time);
+      unoccluded_fit_ready =
+          static_cast<int>(t.unoccluded_positions.size()) == kUnoccludedFitPositions;
+    }
+  }
+  if (p.track.velocity_fit_init && registered && t.hits == 3 && !t.reacquired) {
+    // A young track's Kalman velocity converges slowly: its birth position carries
+    // registration_sigma while later positions carry the range-scaled σ, so the filter stays
+    // anchored on the birth position (a car at 80 m took 10+ frames). At the third
+    // registration the filter restarts from the least-squares line through the three
+    // positions, with that line's covariance (σ as in the updates, or the scatter if larger).
+    restartFromLine(t, fitVelocity(t.history, meas_sigma), frame.time);
+  } else if (p.track.velocity_fit_init && unoccluded_fit_ready && t.seen_occluded &&
+             !t.reacquired && t.unoccluded_updates == kUnoccludedFitPositions) {
+    // That line went through occluded views, whose positions slide with the visible part
+    // towards "no motion" (urban car 4 emerging past a building corner at 8 m/s: 3.0 m/s from
+    // the line, then 7 frames to reach 6.7 m/s, where it coasted through the next occlusion).
+    // The third unoccluded view restarts the filters from the line through the unoccluded
+    // positions alone.
+    restartFromLine(t, fitVelocity(t.unoccluded_positions, meas_sigma), frame.time);
+  }
+  if (cand.features.occluded) t.seen_occluded = true;
+  voteFast(t, registered);
+  updateModel(t, m, frame, candidates, meas_sigma);
+  decideAndRemember(t, m, frame, candidates);
+  report(t, t.similarity, r);
+}
+
+template <typename PointT>
+void MoverTracker<PointT>::voteFast(Track& t, bool registered) const {
+  const auto& p = parameters_;
+  if (p.decision.fast_from_fit && registered) {
+    // Fast only when a straight line fits the measured positions of the window with a speed
+    // above the threshold and well above its uncertainty, the uncertainty taken from the
+    // scatter of the positions about that line (at least the measurement σ). The Kalman
+    // velocity's σ rests on an assumed σ = measurement_sigma_per_metre·range: a pedestrian at
+    // 40 m registered to a few cm (urban) never cleared it (σ_v ≈ 0.65 m/s at 1.3 m/s) and was
+    // confirmed 20 frames late. The scatter credits precise registrations and still withholds
+    // the vote from noisy ones. Centroid measurements (centroid mode, large structures) keep the
+    // Kalman test: with their 0.3 m σ floor a 6-position line cannot tell a walker (σ_v 0.7
+    // m/s), where the filter's longer memory can (centroid-mode walkers were lost).
+    const double floor = p.track.registration_sigma;
+    const LineFit fit = fitVelocity(t.history, floor);
+    const double speed = fit.velocity.norm();
+    t.fast.push_back(fit.valid && speed > p.decision.speed &&
+                     speed > p.decision.speed_sigmas * fit.sigma_v);
+  } else {
+    // Fast only when the speed is above the threshold and well above its own uncertainty.
+    const Eigen::Vector2d v = t.filter.velocity();
+    const double speed = v.norm();
+    double sigma_v = 0;
+    if (speed > 0)
+      sigma_v = std::sqrt(
+          std::max(0.0, v.dot(t.filter.getCovariance().template bottomRightCorner<2, 2>() * v)) /
+          (speed * speed));
+    t.fast.push_back(speed > p.decision.speed && speed > p.decision.speed_sigmas * sigma_v ? 1 : 0);
+  }
+  while (static_cast<int>(t.fast.size()) > p.decision.window) t.fast.pop_front();
+}
+
+template <typename PointT>
+void MoverTracker<PointT>::updateModel(Track& t, const Match& m, const Frame& frame,
+                                       std::vector<Candidate>& candidates, double meas_sigma) {
+  const auto& p = parameters_;
+  const Candidate& cand = candidates[m.cluster];
+  const float half_life_weight =
+      SurfaceDensity::halfLifeWeight(static_cast<float>(p.registration.model_half_life));
+  const bool registered = m.registered;
+  if (registered && t.model) {
+    try {
+      buildView(cand, m.transform, *t.model, frame.sensor_origin);
+      t.model->accumulate(view_, half_life_weight);
+    } catch (const std::exception&) {
+      // Grids always match (same parameters); keep the old model if they ever do not.
+    }
+  }
+  // A track born too low (e.g. half hidden) gets its model once it is seen tall enough.
+  // Its velocity so far came from centroids of a partial view, which jump when the rest of
+  // the object appears: the registered track starts afresh (position and age are kept).
+  if (frame.use_registration && !t.model && !t.large &&
+      cand.features.height >= 0.5 * p.decision.min_height) {
+    ensurePoints(frame.cloud, frame.clusters[m.cluster], candidates[m.cluster]);
+    t.model = makeModel(candidates[m.cluster], frame.sensor_origin);
+    // A re-acquired track keeps the velocity it inherited, not what its filter made of the
+    // partial views' centroids since (a wooded car's front emerging past a trunk: a jump to
+    // another fragment gave it 2 m/s across its path, reported for the next 7 frames).
+    // A mover already confirmed (from views hidden from below, standingHeight()) keeps its
+    // velocity too: it is reported, and restarting it from zero reported a walker emerging
+    // from behind a parked car as standing still for three frames (urban pedestrian 8).
+    const bool keep_velocity = t.reacquired || t.confirmed;
+    const Eigen::Vector2d v_keep =
+        t.reacquired ? t.inherited_velocity : Eigen::Vector2d(t.filter.velocity());
+    t.filter.initialize(
+        cand.features.centroid.template head<2>(),
+        Eigen::Matrix2d::Identity() * meas_sigma * meas_sigma,
+        keep_velocity ? v_keep : Eigen::Vector2d::Zero(),
+        keep_velocity ? p.track.reacquire_velocity_sigma : p.track.initial_velocity_sigma);
+    t.centroid_offset.setZero();
+    t.velocity_filter = KalmanFilterCV();
+    t.registered.clear();
+    t.unoccluded_positions.clear();
+    t.seen_occluded = cand.features.occluded;
+    t.z = cand.features.centroid.z();
+    t.hits = 1;
+    t.fast.assign(1, 0);
+    t.history.assign(
+        1, Eigen::Vector3d(cand.features.centroid.x(), cand.features.centroid.y(), frame.time));
+    t.long_history = t.history;
+  }
+}
+
+template <typename PointT>
+void MoverTracker<PointT>::decideAndRemember(Track& t, const Match& m, const Frame& frame,
+                                             std::vector<Candidate>& candidates) {
+  const auto& p = parameters_;
+  std::vector<Eigen::Vector3f> world_points;
+  if (free_space_map_ && p.free_space.lag > 0 && !t.large) {
+    ensurePoints(frame.cloud, frame.clusters[m.cluster], candidates[m.cluster]);
+    const auto& pts = *candidates[m.cluster].points;
+    world_points.reserve(pts.size());
+    for (const auto& q : pts) world_points.emplace_back(q.x, q.y, q.z);
+  }
+  decideMover(t, world_points);
+  if (const auto& pts = candidates[m.cluster].points) {
+    const std::size_t n = pts->size();
+    const std::size_t stride =
+        std::max<std::size_t>(1, (n + kLastViewPoints - 1) / kLastViewPoints);
+    t.last_view.clear();
+    for (std::size_t k = 0; k < n; k += stride)
+      t.last_view.emplace_back((*pts)[k].x, (*pts)[k].y, (*pts)[k].z);
+  }
+  if (!world_points.empty()) {
+    t.past_points.push_back(std::move(world_points));
+    while (static_cast<int>(t.past_points.size()) > p.free_space.lag + 1) t.past_points.pop_front();
+  }
+}
+
+template <typename PointT>
+void MoverTracker<PointT>::report(const Track& t, double similarity, ClusterResult& r) {
+  r.track_id = t.id;
+  r.mover = t.mover;
+  r.reason = t.reason;
+  r.similarity = similarity;
+  r.velocity = t.reportedVelocity();
+}
+
+template <typename PointT>
+void MoverTracker<PointT>::holdClusters(const Association& association,
+                                        const std::vector<Candidate>& candidates,
+                                        std::vector<char>& track_used,
+                                        std::vector<char>& cluster_used) {
+  const auto& p = parameters_;
   // Held clusters: a confirmed mover whose only gated candidates registered with B below
   // min_similarity (or were too low to register) is not updated (low B is not a measurement: no
   // Kalman update, no model accumulation, the track coasts), but a cluster nobody else took near
   // its prediction is reported as that track instead of starting a new one. Otherwise each such
   // frame would be a missed mover plus a fresh unconfirmed track, and identities would churn.
-  if (p.track.hold_confirmed) {
+  {
     for (std::size_t ti = 0; ti < tracks_.size(); ++ti) {
-      const int c = held_cluster[ti];
+      const int c = association.held_cluster[ti];
       if (track_used[ti] || c < 0 || cluster_used[c]) continue;
       Track& t = tracks_[ti];
       if (t.missed + 1 > p.track.max_missed_frames) continue;  // dies now: let the cluster be born
@@ -1312,18 +1384,16 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
       cluster_used[c] = 1;
       ++t.missed;  // still coasting: deleted after max_missed_frames without a real update
       t.features = candidates[c].features;
-      auto& r = results_[c];
-      r.track_id = t.id;
-      r.mover = t.mover;
-      r.reason = t.reason;
-      r.similarity = 0;
-      r.velocity = t.reportedVelocity();
+      report(t, 0, results_[c]);
     }
   }
+}
 
-  // 5. coast / delete unmatched tracks
+template <typename PointT>
+void MoverTracker<PointT>::dropLostTracks(const std::vector<char>& track_used) {
+  const auto& p = parameters_;
   std::vector<Track> kept;
-  kept.reserve(tracks_.size() + candidates.size());
+  kept.reserve(tracks_.size());
   for (std::size_t ti = 0; ti < tracks_.size(); ++ti) {
     Track& t = tracks_[ti];
     if (!track_used[ti]) ++t.missed;
@@ -1332,8 +1402,13 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     kept.push_back(std::move(t));
   }
   tracks_ = std::move(kept);
+}
 
-  // Births.
+template <typename PointT>
+void MoverTracker<PointT>::bearTracks(const Frame& frame, std::vector<Candidate>& candidates,
+                                      const std::vector<char>& cluster_used) {
+  const auto& p = parameters_;
+  tracks_.reserve(tracks_.size() + candidates.size());
   const std::size_t existing = tracks_.size();
   for (std::size_t c = 0; c < candidates.size(); ++c) {
     auto& cand = candidates[c];
@@ -1342,8 +1417,9 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     Track t;
     t.id = next_id_++;
     t.filter.setAccelerationNoise(p.track.acceleration_noise);
-    const double sigma = cand.features.large || !use_registration ? p.track.centroid_sigma
-                                                                  : p.track.registration_sigma;
+    const double sigma = cand.features.large || !frame.use_registration
+                             ? p.track.centroid_sigma
+                             : p.track.registration_sigma;
     // Re-acquisition after occlusion: a mover that passed behind an occluder comes back as a
     // cluster its track cannot take (another part of the object, far from the predicted
     // centroid, or one that does not register against the model of the part seen before). Its
@@ -1356,7 +1432,7 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     // Registration mode only: centroid mode's speed votes read the tracking filter's velocity,
     // which an inherited velocity would vote for without any evidence (centroid urban: 2 → 8
     // false alarms).
-    if (p.track.reacquire_velocity && use_registration && p.decision.fast_from_fit &&
+    if (p.track.reacquire_velocity && frame.use_registration && p.decision.fast_from_fit &&
         !cand.features.large) {
       double best = std::numeric_limits<double>::max();
       for (std::size_t ti = 0; ti < existing; ++ti) {
@@ -1389,7 +1465,7 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     t.filter.initialize(cand.features.centroid.template head<2>(),
                         Eigen::Matrix2d::Identity() * sigma * sigma, v0, v0_sigma);
     t.z = cand.features.centroid.z();
-    t.last_time = time;
+    t.last_time = frame.time;
     t.hits = 1;
     t.features = cand.features;
     t.large = cand.features.large;
@@ -1398,11 +1474,11 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     t.max_length = cand.features.large ? 0.0 : cand.features.length;
     t.fast.push_back(0);
     t.seen_occluded = cand.features.occluded;
-    t.history.emplace_back(cand.features.centroid.x(), cand.features.centroid.y(), time);
+    t.history.emplace_back(cand.features.centroid.x(), cand.features.centroid.y(), frame.time);
     t.long_history = t.history;
-    if (use_registration && !t.large && cand.features.height >= 0.5 * p.decision.min_height) {
-      ensurePoints(*cloud, clusters[c], cand);
-      t.model = makeModel(cand, sensor_origin);
+    if (frame.use_registration && !t.large && cand.features.height >= 0.5 * p.decision.min_height) {
+      ensurePoints(frame.cloud, frame.clusters[c], cand);
+      t.model = makeModel(cand, frame.sensor_origin);
     }
     auto& r = results_[c];
     r.track_id = t.id;

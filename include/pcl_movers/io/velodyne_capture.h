@@ -157,6 +157,11 @@ class VelodyneCapture {
  * InputError naming the file when it has no data packet or the packet does not tell. */
 VelodyneModel detectVelodyneModel(const std::string& pcap_path);
 
+/** \brief The model a tool's --sensor NAME names for the capture `pcap_path`: "auto" reads it
+ * from the capture (detectVelodyneModel()), any other name is velodyneModelFromName(). Throws
+ * InputError naming the file or the name. */
+VelodyneModel velodyneModelFor(const std::string& name, const std::string& pcap_path);
+
 /** \brief Reads all full sweeps of a capture (VelodyneCapture::next until the end). Throws
  * InputError naming the file when the capture has no Velodyne data packet or no full sweep. */
 std::vector<VelodyneSweep> readVelodyneCapture(const std::string& pcap_path, VelodyneModel model,
