@@ -382,6 +382,7 @@ class MoverTracker {
     double time;                                     ///< frame time [s]
     double dt;                                       ///< since the last frame [s]
     bool use_registration;                           ///< registration mode (else centroid)
+    float model_weight;  ///< SurfaceDensity::halfLifeWeight() of model_half_life
   };
   /** \brief One frame's association: every gated (track, cluster) pair with its score, best
    * first, and per track the nearest cluster a confirmed mover could hold (hold_confirmed). */
@@ -531,6 +532,8 @@ class MoverTracker {
   SurfaceDensity view_;
   std::vector<Eigen::Vector3f> view_points_;
   std::vector<float> view_sigmas_;
+  /// Buffer of gateTrack(): its gated candidates to register (centroid distance, cluster).
+  std::vector<std::pair<double, std::size_t>> to_register_;
   const FreeSpaceMap* free_space_map_ = nullptr;
 };
 

@@ -72,7 +72,8 @@ MoverTracker<PointT>::MoverTracker(const MoverTracker& other) {
 template <typename PointT>
 MoverTracker<PointT>& MoverTracker<PointT>::operator=(const MoverTracker& other) {
   if (this == &other) return *this;
-  // Every member but the work buffers (registration_, view_*), which each tracker keeps its own.
+  // Every member but the work buffers (registration_, view_*, to_register_), which each tracker
+  // keeps its own.
   parameters_ = other.parameters_;
   tracks_ = other.tracks_;
   results_ = other.results_;
@@ -862,7 +863,14 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
   const double dt = has_time_ ? std::max(0.0, time - last_time_) : 0.0;
   has_time_ = true;
   last_time_ = time;
-  const Frame frame{*cloud, clusters, sensor_origin, time, dt, p.track.mode != "centroid"};
+  const Frame frame{
+      *cloud,
+      clusters,
+      sensor_origin,
+      time,
+      dt,
+      p.track.mode != "centroid",
+      SurfaceDensity::halfLifeWeight(static_cast<float>(p.registration.model_half_life))};
 
   predictTracks(dt);
   std::vector<Candidate> candidates = makeCandidates(frame, occluded, floor_z);
@@ -930,45 +938,42 @@ std::vector<int> MoverTracker<PointT>::findStillClusters(
   // other cluster is within static_clearance. cheap[ti] is that cluster (-1: register as usual).
   std::vector<int> cheap(tracks_.size(), -1);
   if (!frame.use_registration || p.track.static_refresh_frames <= 1) return cheap;
-  {
-    for (std::size_t ti = 0; ti < tracks_.size(); ++ti) {
-      const Track& track = tracks_[ti];
-      if (!track.model || track.hits < p.decision.min_age || track.mover ||
-          track.filter.speed() > 0.5 * p.decision.speed ||
-          track.since_registration + 1 >= p.track.static_refresh_frames)
-        continue;
-      double nearest = std::numeric_limits<double>::max(), second = nearest;
-      int nearest_cluster = -1;
-      for (std::size_t c = 0; c < candidates.size(); ++c) {
-        const auto& cand = candidates[c];
-        if (!cand.usable) continue;
-        const double d =
-            (cand.features.centroid - track.features.centroid).template head<2>().norm();
-        if (d < nearest) {
-          second = nearest;
-          nearest = d;
-          nearest_cluster = static_cast<int>(c);
-        } else if (d < second) {
-          second = d;
-        }
+  for (std::size_t ti = 0; ti < tracks_.size(); ++ti) {
+    const Track& track = tracks_[ti];
+    if (!track.model || track.hits < p.decision.min_age || track.mover ||
+        track.filter.speed() > 0.5 * p.decision.speed ||
+        track.since_registration + 1 >= p.track.static_refresh_frames)
+      continue;
+    double nearest = std::numeric_limits<double>::max(), second = nearest;
+    int nearest_cluster = -1;
+    for (std::size_t c = 0; c < candidates.size(); ++c) {
+      const auto& cand = candidates[c];
+      if (!cand.usable) continue;
+      const double d = (cand.features.centroid - track.features.centroid).template head<2>().norm();
+      if (d < nearest) {
+        second = nearest;
+        nearest = d;
+        nearest_cluster = static_cast<int>(c);
+      } else if (d < second) {
+        second = d;
       }
-      if (nearest_cluster < 0 || !(nearest < p.track.static_shift)) continue;
-      // Another cluster this close would make the association ambiguous: register then.
-      if (second <= p.track.static_clearance) continue;
-      if (second <= 2 * p.track.gate_margin) {
-        // A neighbour within the old two-gate-margin bound (it was always registered then): the
-        // cluster must also have kept its size, so a split or merge with that neighbour (which
-        // moves the centroid little when the other part is small) is registered.
-        const auto& f = candidates[nearest_cluster].features;
-        const double points_ratio =
-            static_cast<double>(f.points) / std::max(1, track.features.points);
-        if (points_ratio < 0.8 || points_ratio > 1.25 ||
-            std::abs(f.height - track.features.height) > 0.3 ||
-            std::abs(f.length - track.features.length) > 0.3)
-          continue;
-      }
-      cheap[ti] = nearest_cluster;
     }
+    if (nearest_cluster < 0 || !(nearest < p.track.static_shift)) continue;
+    // Another cluster this close would make the association ambiguous: register then.
+    if (second <= p.track.static_clearance) continue;
+    if (second <= 2 * p.track.gate_margin) {
+      // A neighbour within the old two-gate-margin bound (it was always registered then): the
+      // cluster must also have kept its size, so a split or merge with that neighbour (which
+      // moves the centroid little when the other part is small) is registered.
+      const auto& f = candidates[nearest_cluster].features;
+      const double points_ratio =
+          static_cast<double>(f.points) / std::max(1, track.features.points);
+      if (points_ratio < 0.8 || points_ratio > 1.25 ||
+          std::abs(f.height - track.features.height) > 0.3 ||
+          std::abs(f.length - track.features.length) > 0.3)
+        continue;
+    }
+    cheap[ti] = nearest_cluster;
   }
   return cheap;
 }
@@ -1005,7 +1010,7 @@ void MoverTracker<PointT>::gateTrack(std::size_t ti, const Frame& frame,
                                      Association& association) {
   const auto& p = parameters_;
   const double accel_term = 0.5 * p.track.acceleration_limit * frame.dt * frame.dt;
-  std::vector<std::pair<double, std::size_t>> to_register;  // (centroid distance, cluster)
+  auto& to_register = to_register_;
   const Track& track = tracks_[ti];
   const bool skip_claimed = track.missed > 0 && !track.mover && !track.confirmed &&
                             track.filter.speed() < 0.5 * p.decision.speed;
@@ -1037,7 +1042,7 @@ void MoverTracker<PointT>::gateTrack(std::size_t ti, const Frame& frame,
     // A track with a model is only ever updated by registration: mixing centroid measurements
     // into its reference-point track would fake motion.
     if (frame.use_registration && track.model && !cand_registrable) {
-      // But a confirmed mover may hold it (see "held" below): a walker passing behind a
+      // But a confirmed mover may hold it (see holdClusters()): a walker passing behind a
       // parked car shows only its head and shoulders, too low to register.
       if (track.confirmed && !cand.features.large &&
           distance <= std::min(p.track.max_gate_radius, search) + p.track.gate_margin &&
@@ -1105,7 +1110,7 @@ void MoverTracker<PointT>::gateTrack(std::size_t ti, const Frame& frame,
     }
     if (!registerCandidate(track, cand, guess, radius, frame.sensor_origin, m)) {
       // Remember the nearest gated candidate a confirmed mover failed to register (turning,
-      // half occluded): it may still be that mover (see "held" below).
+      // half occluded): it may still be that mover (see holdClusters()).
       if ((track.confirmed || track.mover) && distance < association.held_distance[ti]) {
         association.held_distance[ti] = distance;
         association.held_cluster[ti] = static_cast<int>(c);
@@ -1282,13 +1287,11 @@ void MoverTracker<PointT>::updateModel(Track& t, const Match& m, const Frame& fr
                                        std::vector<Candidate>& candidates, double meas_sigma) {
   const auto& p = parameters_;
   const Candidate& cand = candidates[m.cluster];
-  const float half_life_weight =
-      SurfaceDensity::halfLifeWeight(static_cast<float>(p.registration.model_half_life));
   const bool registered = m.registered;
   if (registered && t.model) {
     try {
       buildView(cand, m.transform, *t.model, frame.sensor_origin);
-      t.model->accumulate(view_, half_life_weight);
+      t.model->accumulate(view_, frame.model_weight);
     } catch (const std::exception&) {
       // Grids always match (same parameters); keep the old model if they ever do not.
     }
