@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -215,6 +216,54 @@ TEST(SequenceIO, BadInputsNameTheFileAndReason) {
               io::readScan((dir.path() / "x.xyz").string(), cloud);
             }).find("unknown scan format"),
             std::string::npos);
+}
+
+// Headers whose layout PCL's reader would write past (it sizes its buffer at POINTS and writes
+// every point with the final step: fuzz_pcd_pipeline found the heap corruption in CI). Each is
+// refused before PCL reads the body, with the reason; the fields-past-the-step and
+// compressed-size cases are the other two ways to make it write outside that buffer.
+TEST(SequenceIO, PcdLayoutThatPclWouldOverrunIsRefused) {
+  TempDir dir;
+  pcl::PointCloud<pcl::PointXYZI> cloud;
+  auto message = [&](const std::string& name, const std::string& text) {
+    writeFile(dir.path() / name, text);
+    const std::string m =
+        expectInputError([&] { io::readScan((dir.path() / name).string(), cloud); });
+    EXPECT_NE(m.find(name), std::string::npos) << m;
+    return m;
+  };
+  std::string values;
+  for (int i = 0; i < 2 * 120; ++i) values += i % 120 == 119 ? "0\n" : "0 ";
+  EXPECT_NE(message("late_count.pcd",
+                    "VERSION .7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 2\n"
+                    "HEIGHT 1\nPOINTS 2\nCOUNT 40 40 40\nDATA ascii\n" +
+                        values)
+                .find("changes after POINTS"),
+            std::string::npos);
+  // A second SIZE line after COUNT recomputes offsets without the counts: z at 8 with 4 x 4
+  // bytes ends at 24 of a 12-byte point.
+  EXPECT_NE(message("late_size.pcd",
+                    "VERSION .7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 4\n"
+                    "SIZE 4 4 4\nWIDTH 1\nHEIGHT 1\nPOINTS 1\nDATA ascii\n1 2 3 4 5 6\n")
+                .find("field 'z' ends at byte 24"),
+            std::string::npos);
+  // binary_compressed whose stored uncompressed size differs from the header's: PCL would
+  // resize its buffer to the stored size and unpack the header's points into it.
+  std::string compressed =
+      "VERSION .7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 4\nHEIGHT 1\n"
+      "POINTS 4\nDATA binary_compressed\n";
+  const std::uint32_t sizes[2] = {8, 12};  // 12 bytes stored, 48 described
+  compressed.append(reinterpret_cast<const char*>(sizes), sizeof(sizes));
+  compressed.append(64, '\0');
+  EXPECT_NE(message("small_lzf.pcd", compressed).find("stores 12 uncompressed bytes"),
+            std::string::npos);
+  // The same layouts written in the usual order are read.
+  writeFile(dir.path() / "good.pcd",
+            "VERSION .7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 2\n"
+            "HEIGHT 1\nPOINTS 2\nDATA ascii\n1 2 3\n4 5 6\n");
+  io::readScan((dir.path() / "good.pcd").string(), cloud);
+  ASSERT_EQ(cloud.size(), 2u);
+  EXPECT_FLOAT_EQ(cloud[1].z, 6.f);
 }
 
 TEST(SequenceIO, PoseAndTimeFilesAreChecked) {

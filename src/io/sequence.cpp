@@ -183,6 +183,48 @@ void checkPcdClaimedSize(const std::string& path) {
   throw InputError(path, points_line, why.str());
 }
 
+/** Refuses a PCD header whose point layout PCL's reader would write past.
+ *
+ * pcl::PCDReader sizes its buffer when it parses POINTS, with the point step known then, but
+ * writes every point with the step and field offsets of the whole header: a COUNT, SIZE or FIELDS
+ * line after POINTS (or fields reaching past the step) makes it write beyond the buffer, in PCL's
+ * own, uninstrumented code (a 24-byte buffer took 960 bytes of ASCII values; found by
+ * fuzz_pcd_pipeline in CI as heap corruption that ASan noticed only inputs later). A
+ * binary_compressed body is unpacked into its stored uncompressed size, so that must be the
+ * header's size too. The header PCL parsed (`header`, `data_type`, `data_idx` from readHeader)
+ * is the one its read() parses again. */
+void checkPcdLayout(const std::string& path, const pcl::PCLPointCloud2& header, int data_type,
+                    unsigned int data_idx) {
+  const std::size_t points = static_cast<std::size_t>(header.width) * header.height;
+  const std::size_t bytes = points * header.point_step;
+  for (const auto& field : header.fields) {
+    const std::size_t end =
+        field.offset + static_cast<std::size_t>(field.count) * pcl::getFieldSize(field.datatype);
+    if (end > header.point_step)
+      throw InputError(path, 0,
+                       "malformed PCD header: field '" + field.name + "' ends at byte " +
+                           std::to_string(end) + " of a " + std::to_string(header.point_step) +
+                           "-byte point (SIZE/COUNT lines do not match FIELDS)");
+  }
+  if (header.data.size() != bytes)
+    throw InputError(path, 0,
+                     "malformed PCD header: the point layout changes after POINTS (" +
+                         std::to_string(header.data.size() / std::max<std::size_t>(points, 1)) +
+                         " bytes per point when POINTS was read, " +
+                         std::to_string(header.point_step) +
+                         " at the end); put FIELDS, SIZE, TYPE and COUNT before POINTS");
+  if (data_type != 2) return;
+  std::ifstream in(path, std::ios::binary);
+  std::uint32_t sizes[2] = {0, 0};
+  in.seekg(data_idx);
+  if (!in.read(reinterpret_cast<char*>(sizes), sizeof(sizes)))
+    throw InputError(path, 0, "binary_compressed PCD without its compressed-size record");
+  if (sizes[1] != bytes)
+    throw InputError(path, 0,
+                     "binary_compressed PCD stores " + std::to_string(sizes[1]) +
+                         " uncompressed bytes, the header describes " + std::to_string(bytes));
+}
+
 void readPcdHeader(const std::string& path, pcl::PCLPointCloud2& header, Eigen::Vector4f& origin,
                    Eigen::Quaternionf& orientation) {
   checkPcdClaimedSize(path);
@@ -199,6 +241,7 @@ void readPcdHeader(const std::string& path, pcl::PCLPointCloud2& header, Eigen::
                      std::string("not a readable PCD file (malformed header: ") + e.what() + ")");
   }
   if (status < 0) throw InputError(path, 0, "not a readable PCD file (bad or missing header)");
+  checkPcdLayout(path, header, data_type, data_idx);
 }
 
 bool hasField(const pcl::PCLPointCloud2& cloud, const char* name) {
