@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
-# Ablation of the detector's rules on the scene corpus's tune split (registration mode): each rule
-# switched off alone (its documented "off" value), everything else at its default, side by side
-# with the defaults, in both tracker modes: a rule idle with registered positions can still carry
-# centroid mode (the displacement check does). Which rules earn their place is decided on these
-# rows (issue #28), never on the check split. Uses the corpus cached in BUILD_DIR/corpus (scripts/eval_corpus.sh).
+# Ablation of the detector's rules on the scene corpus's tune split: each rule switched off alone
+# (its documented "off" value), everything else at its default, side by side with the defaults,
+# in both tracker modes: a rule idle with registered positions can still carry centroid mode (the
+# displacement check does). Which rules earn their place is decided on these rows (issue #28),
+# never on the check split. Uses the corpus cached in BUILD_DIR/corpus (scripts/eval_corpus.sh).
 # Prints one Markdown section. Usage: bash scripts/eval_ablation.sh BUILD_DIR
 set -euo pipefail
 BUILD_DIR=$(cd "${1:?usage: eval_ablation.sh BUILD_DIR}" && pwd)

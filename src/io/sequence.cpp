@@ -183,13 +183,32 @@ void checkPcdClaimedSize(const std::string& path) {
   throw InputError(path, points_line, why.str());
 }
 
+/** Refuses a cloud with a field that does not lie inside its point step (or has no valid type):
+ * PCL's PCD reader would write past its buffer there, and pcl::fromPCLPointCloud2, which copies
+ * each field from offset to offset + size within every point, would read past the data (both
+ * found by fuzzing). Checked on a PCD's header before PCL reads its body, and on every blob read.
+ */
+void checkFieldsInsidePoint(const std::string& path, const pcl::PCLPointCloud2& cloud) {
+  for (const auto& field : cloud.fields) {
+    const std::size_t size =
+        pcl::getFieldSize(field.datatype) * std::max<std::size_t>(1, field.count);
+    const std::size_t end = field.offset + size;
+    if (size == 0 || end > cloud.point_step)
+      throw InputError(path, 0,
+                       "field '" + field.name + "' ends at byte " + std::to_string(end) +
+                           ", outside the point's " + std::to_string(cloud.point_step) +
+                           " bytes (SIZE, TYPE or COUNT do not match FIELDS)");
+  }
+}
+
 /** Refuses a PCD header whose point layout PCL's reader would write past.
  *
  * pcl::PCDReader sizes its buffer when it parses POINTS, with the point step known then, but
  * writes every point with the step and field offsets of the whole header: a COUNT, SIZE or FIELDS
- * line after POINTS (or fields reaching past the step) makes it write beyond the buffer, in PCL's
- * own, uninstrumented code (a 24-byte buffer took 960 bytes of ASCII values; found by
- * fuzz_pcd_pipeline in CI as heap corruption that ASan noticed only inputs later). A
+ * line after POINTS (or fields reaching past the step, checkFieldsInsidePoint()) makes it write
+ * beyond the buffer, in PCL's own, uninstrumented code (a 24-byte buffer took 960 bytes of ASCII
+ * values; found by fuzz_pcd_pipeline in CI as heap corruption that ASan noticed only inputs
+ * later). A
  * binary_compressed body is unpacked into its stored uncompressed size, so that must be the
  * header's size too. The header PCL parsed (`header`, `data_type`, `data_idx` from readHeader)
  * is the one its read() parses again. */
@@ -197,15 +216,7 @@ void checkPcdLayout(const std::string& path, const pcl::PCLPointCloud2& header, 
                     unsigned int data_idx) {
   const std::size_t points = static_cast<std::size_t>(header.width) * header.height;
   const std::size_t bytes = points * header.point_step;
-  for (const auto& field : header.fields) {
-    const std::size_t end =
-        field.offset + static_cast<std::size_t>(field.count) * pcl::getFieldSize(field.datatype);
-    if (end > header.point_step)
-      throw InputError(path, 0,
-                       "malformed PCD header: field '" + field.name + "' ends at byte " +
-                           std::to_string(end) + " of a " + std::to_string(header.point_step) +
-                           "-byte point (SIZE/COUNT lines do not match FIELDS)");
-  }
+  checkFieldsInsidePoint(path, header);
   if (header.data.size() != bytes)
     throw InputError(path, 0,
                      "malformed PCD header: the point layout changes after POINTS (" +
@@ -346,16 +357,7 @@ void readBlob(const std::string& path, pcl::PCLPointCloud2& blob, Eigen::Vector4
     if (!hasField(blob, f)) throw InputError(path, 0, std::string("scan has no '") + f + "' field");
   if (blob.data.size() < static_cast<std::size_t>(blob.width) * blob.height * blob.point_step)
     throw InputError(path, 0, "truncated point data");
-  // pcl::fromPCLPointCloud2 copies each field from offset to offset + size within every point: a
-  // header whose field reaches past the point step would read past the data (found by fuzzing).
-  for (const auto& field : blob.fields) {
-    const std::size_t size =
-        pcl::getFieldSize(field.datatype) * std::max<std::size_t>(1, field.count);
-    if (size == 0 || field.offset + size > blob.point_step)
-      throw InputError(path, 0,
-                       "field '" + field.name + "' lies outside the point's " +
-                           std::to_string(blob.point_step) + " bytes");
-  }
+  checkFieldsInsidePoint(path, blob);
 }
 
 /** The blob's points as PointT (intensity 0 when the blob has none). */
