@@ -32,7 +32,7 @@ rules=(
   "displacement check|--decision.displacement_ratio 0|net displacement consistent with the speed"
   "early confirmation|--decision.confirm_false_rate 0|F-test confirmation of well-measured motion"
   "mover latch|--decision.latch 0|a confirmed mover stays one while tracked"
-  "height below an occluder|--decision.standing_height_from_occluder 0|hidden lower part counted"
+  "height from what it stands on|--decision.standing_height 0|top above the ground or an occluder below"
   "minimum height|--decision.min_height 0|clusters lower than 0.8 m are not movers"
   "free-space test|--free_space.lag 0|a mover must occupy space seen empty"
   "long-lag free space|--free_space.long_lag 0|a second, longer lag for slow and far objects"

@@ -1212,12 +1212,12 @@ TEST(MoverTracker, ConfirmedWalkerHoldsItsHeadAndShouldersSeenAboveAParkedCar) {
 // A walker seen only above a parked car: its 0.3 m head-and-shoulders cluster is under
 // min_mover_height, but the car hides its lower part (the detector passes the car's lowest point
 // as the cluster's floor), so it is measured down to there and becomes a mover. Without the floor,
-// or with standing_height_from_occluder off, it never does.
+// or with standing_height off, it never does.
 TEST(MoverTracker, WalkerSeenOnlyAboveAParkedCarIsAMoverThroughTheCarsFloor) {
   const Eigen::Vector3d sensor(0, 0, 1.7);
   for (const int variant : {0, 1, 2}) {  // floor given; no floor; rule off
     auto params = defaults();
-    if (variant == 2) params.decision.standing_height_from_occluder = false;
+    if (variant == 2) params.decision.standing_height = false;
     Tracker tracker;
     tracker.setParameters(params);
     int movers = 0;

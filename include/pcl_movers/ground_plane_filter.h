@@ -185,6 +185,10 @@ class GroundPlaneFilter : public pcl::FilterIndices<PointT> {
   const std::vector<Plane>& getCellPlanes() const { return cell_planes_; }
   /** \brief Whether each cell of the last run fitted its own plane (false = inherited). */
   const std::vector<std::uint8_t>& getCellFitted() const { return cell_fitted_; }
+  /** \brief Per point of the last input: its height above its cell's plane [m], NaN for points
+   * that were not finite. What an object standing there rises to above the ground under it,
+   * however few of its lower points a sparse sensor sampled. */
+  const std::vector<float>& getPointHeights() const { return height_; }
 
  protected:
   /** \brief Fills `indices` with the non-ground (or, when negative, ground) points. */

@@ -167,6 +167,13 @@ class MoverDetector {
                               const Eigen::Isometry3d& pose, PointCloud& world,
                               std::vector<pcl::PointIndices>& world_clusters);
 
+  /** \brief Lowers each cluster's floor (floor_z_, world z; NaN = none) to the ground under
+   * it: the median over its points of (world z − height above the ground filter's cell plane).
+   * A car seen by one or two beams of a sparse sensor shows a 0.1-0.5 m slice, yet its top
+   * stands 1.5 m above the ground under it: that is what the mover height test asks. */
+  void groundFloors(const PointCloud& world, const std::vector<pcl::PointIndices>& clusters,
+                    const std::vector<pcl::PointIndices>& world_clusters);
+
   /** \brief Forgets all tracks and the origin (start of a new sequence). */
   void reset() {
     tracker_.reset();

@@ -131,8 +131,8 @@ class MoverTracker {
     /// A side of the cluster is bounded by a nearer object (see update()): its extent there is
     /// not the object's, and its measured position can slide while it emerges or hides.
     bool occluded = false;
-    /// Lowest point (world z) of a nearer object hiding the cluster's lower part (a parked car
-    /// below a walker's head), NaN when nothing hides it from below (see update()).
+    /// What the object stands on (world z): the lowest point of a nearer object hiding its lower
+    /// part (a parked car below a walker's head), else the ground under it; NaN = unknown.
     double floor_z = std::numeric_limits<double>::quiet_NaN();
   };
 
@@ -257,9 +257,10 @@ class MoverTracker {
    * (RangeImageRegionGrowing::occludedSides(), non-zero = occluded; the kSplitPart bit = a part
    * of a merged cluster split by splitMergedClusters(), also tracked below min_cluster_points,
    * down to kMinSplitPoints); empty = unknown (none)
-   * \param floor_z per cluster, the world z of the lowest point of a nearer object hiding its
-   * lower part (RangeImageRegionGrowing::occluderFloors()), NaN where none; empty = none. With
-   * standing_height_from_occluder the mover height test measures such a cluster down to there. */
+   * \param floor_z per cluster, the world z of what it stands on: the lowest point of a nearer
+   * object hiding its lower part (RangeImageRegionGrowing::occluderFloors()) or the ground under
+   * it; NaN where unknown, empty = none. With decision.standing_height the mover height test
+   * measures the cluster's top from there. */
   void update(const PointCloudConstPtr& cloud, const std::vector<pcl::PointIndices>& clusters,
               const Eigen::Vector3d& sensor_origin, double time,
               const std::vector<std::uint8_t>& occluded = {},
@@ -481,8 +482,8 @@ class MoverTracker {
                             bool occluded, double time, double range, double since,
                             bool reanchor = false) const;
 
-  /** \brief Height of a cluster for the mover height test: down to the lowest point of a nearer
-   * object hiding its lower part (standing_height_from_occluder), else its own extent. */
+  /** \brief Height of a cluster for the mover height test: its top above what it stands on
+   * (ClusterFeatures::floor_z, decision.standing_height), at least its own extent. */
   double standingHeight(const ClusterFeatures& features) const;
   /** \brief Whether a moving track other than `track` (a mover, confirmed, or faster than
    * mover_speed) lies within half its longest view plus gate_margin of `track`'s position. */

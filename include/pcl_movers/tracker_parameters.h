@@ -320,11 +320,13 @@ struct DecisionParameters {
   /// (0).
   bool latch = true;
 
-  /// 1 = a cluster whose lower part a nearer object hides (RangeImageRegionGrowing::
-  /// occluderFloors(): at least half its bottom cells have a nearer object right below) counts,
-  /// for the min_height test, as reaching down to that object's lowest point: a walker seen
-  /// only above a parked car shows a 0.3 m head and shoulders; 0 = its visible extent.
-  bool standing_height_from_occluder = true;
+  /// 1 = a view's height, for the min_height test, is measured from what the object stands on:
+  /// the ground under it (the ground filter's plane there: a car seen by one or two beams of a
+  /// sparse sensor shows a 0.1 m slice whose top stands 1.2 m above the road) or, when a nearer
+  /// object hides its lower part (RangeImageRegionGrowing::occluderFloors(): at least half its
+  /// bottom cells have a nearer object right below), that object's lowest point (a walker seen
+  /// only above a parked car shows a 0.3 m head and shoulders); 0 = its visible extent.
+  bool standing_height = true;
 
   /** \brief Calls `f(key, member, description)` for every setting. */
   template <typename F>
@@ -350,9 +352,9 @@ struct DecisionParameters {
     f("confirm_free_space_votes", confirm_free_space_votes,
       "early confirmation: passed free-space tests needed");
     f("latch", latch, "1 = a confirmed mover stays a mover while tracked");
-    f("standing_height_from_occluder", standing_height_from_occluder,
-      "1 = a cluster hidden from below by a nearer object is measured down to it for  "
-      "min_mover_height");
+    f("standing_height", standing_height,
+      "1 = a view's height is measured from the ground under it or a nearer object hiding its "
+      "lower part");
   }
 };
 

@@ -187,6 +187,29 @@ void MoverDetector<PointT>::clustersToWorld(const PointCloud& organized,
 }
 
 template <typename PointT>
+void MoverDetector<PointT>::groundFloors(const PointCloud& world,
+                                         const std::vector<pcl::PointIndices>& clusters,
+                                         const std::vector<pcl::PointIndices>& world_clusters) {
+  if (!ground_.object) return;
+  const std::vector<float>& height = ground_.object->getPointHeights();
+  floor_z_.resize(clusters.size(), std::numeric_limits<double>::quiet_NaN());
+  std::vector<float> under;
+  for (std::size_t c = 0; c < clusters.size(); ++c) {
+    under.clear();
+    const auto& idx = clusters[c].indices;
+    for (std::size_t k = 0; k < idx.size(); ++k) {
+      const auto i = static_cast<std::size_t>(idx[k]);
+      if (i < height.size() && std::isfinite(height[i]))
+        under.push_back(world[world_clusters[c].indices[k]].z - height[i]);
+    }
+    if (under.empty()) continue;
+    auto mid = under.begin() + static_cast<std::ptrdiff_t>(under.size() / 2);
+    std::nth_element(under.begin(), mid, under.end());
+    if (!(*mid >= floor_z_[c])) floor_z_[c] = *mid;  // the lower of ground and occluder floor
+  }
+}
+
+template <typename PointT>
 void MoverDetector<PointT>::process(const PointCloudConstPtr& scan,
                                     const Eigen::Isometry3d& world_pose, double time, int frame,
                                     FrameResult& result) {
@@ -245,7 +268,7 @@ void MoverDetector<PointT>::process(const PointCloudConstPtr& scan,
     tracker_.setFreeSpaceMap(nullptr);
   }
   // One labelling of the range image's cells serves both occlusion tests below.
-  if (p.track.occluded_fraction > 0 || p.decision.standing_height_from_occluder)
+  if (p.track.occluded_fraction > 0 || p.decision.standing_height)
     RangeImageRegionGrowing<PointT>::cellLabels(*organized, *objects, clusters, cell_labels_);
   // Occluded cluster sides (range image, sensor frame): measurements there can slide.
   if (p.track.occluded_fraction > 0)
@@ -255,9 +278,10 @@ void MoverDetector<PointT>::process(const PointCloudConstPtr& scan,
         static_cast<float>(p.track.occluded_fraction), occluded_);
   else
     occluded_.clear();
-  // Clusters hidden from below by a nearer object: the world z of that object's lowest point.
+  // What each cluster stands on, as a world z (the mover height test, standingHeight()): the
+  // lowest point of a nearer object hiding it from below, else the ground under it.
   floor_z_.clear();
-  if (p.decision.standing_height_from_occluder) {
+  if (p.decision.standing_height) {
     RangeImageRegionGrowing<PointT>::occluderFloors(
         *organized, cell_labels_, clusters, static_cast<float>(p.segment.depth_ratio),
         static_cast<float>(p.segment.depth_min), p.segment.max_gap, 0.5f, floors_);
@@ -266,6 +290,7 @@ void MoverDetector<PointT>::process(const PointCloudConstPtr& scan,
       if (floors_[c] >= 0)
         floor_z_[c] =
             (pose * (*organized)[floors_[c]].getVector3fMap().template cast<double>()).z();
+    groundFloors(*world, clusters, world_clusters);
   }
   // Clusters holding objects of two tracks that move differently are split between them; the
   // sensor-frame clusters (outputs) and occlusion flags follow the same split.

@@ -736,10 +736,10 @@ std::vector<pcl::PointIndices> MoverTracker<PointT>::applyParts(
 
 template <typename PointT>
 double MoverTracker<PointT>::standingHeight(const ClusterFeatures& f) const {
-  // A cluster whose lower part a nearer object hides (a walker's head above a parked car) may
-  // reach down to that object's lowest point: measured from there for the mover height test.
-  if (!parameters_.decision.standing_height_from_occluder || !std::isfinite(f.floor_z))
-    return f.height;
+  // Measured from what the object stands on (ClusterFeatures::floor_z): the ground under it
+  // (a sparse sensor's one or two beams across a car), or the lowest point of a nearer object
+  // hiding its lower part (a walker's head above a parked car).
+  if (!parameters_.decision.standing_height || !std::isfinite(f.floor_z)) return f.height;
   return std::max(f.height, f.max_z - std::min(f.min_z, f.floor_z));
 }
 
@@ -820,10 +820,10 @@ void MoverTracker<PointT>::decideMover(Track& track,
   if (!well_measured && track.hits < p.decision.min_age) return;
   // The tallest view counts: a cluster's height changes with the view (a van seen from straight
   // behind showed 0.7-0.9 m and its decision flickered around min_mover_height).
-  // A view hidden from below counts down to the object hiding it (standingHeight()), unless a
-  // moving object is beside it: then it is more likely that object's own upper part, cut off by
-  // its nearer lower body (urban cars, the KITTI van: such fragments became movers with the
-  // velocity of their sliding centroid).
+  // A lower view counts from what it stands on (standingHeight(): the ground under it, or the
+  // object hiding it from below), unless a moving object is beside it: then it is more likely
+  // that object's own upper part, cut off by its nearer lower body (urban cars, the KITTI van: such
+  // fragments became movers with the velocity of their sliding centroid).
   const bool seen_standing_only = track.max_height < p.decision.min_height;
   track.reason = MoverReason::kLow;
   if (seen_standing_only &&
