@@ -26,15 +26,18 @@
 #include <csignal>
 #include <cstdio>
 #include <cstring>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <iterator>
+#include <limits>
 #include <map>
 #include <memory>
 #include <set>
 #include <sstream>
 #include <type_traits>
+#include <utility>
 
 #include "tool_utils.h"
 
@@ -785,6 +788,8 @@ struct InputFrame {
   std::string error;                ///< why it could not be read (--skip-bad-frames)
   double time = 0;                  ///< sweeps: first firing [s past the hour, sensor clock]
   std::vector<float> time_offsets;  ///< sweeps: per point [s after `time`], NaN without return
+  /** The first sweep, when de-skewed with given poses: the next sweep's `time` (NaN: none). */
+  double next_time = std::numeric_limits<double>::quiet_NaN();
 };
 
 /** Frame i of a folder, read on the reading thread; with --skip-bad-frames a malformed one is
@@ -1052,16 +1057,40 @@ std::unique_ptr<pcl_movers::io::FrameStream<InputFrame>> DetectRun::openStream()
         },
         o_.queue, QueuePolicy::kBlock);
   }
-  auto read = std::make_shared<std::size_t>(0);
+  // The first sweep's de-skewing takes the next sweep's pose at its start (applyDeskew()), so
+  // the second sweep is read with it; an error reading it comes after the first sweep.
+  struct Reading {
+    std::size_t read = 0;
+    std::unique_ptr<pcl_movers::io::VelodyneSweep> ahead;
+    std::exception_ptr error;
+  };
+  auto state = std::make_shared<Reading>();
+  const bool look_ahead = o_.params.deskew != "off" && !estimate_;
   pcl_movers::io::VelodyneCapture* capture = capture_.get();
   return std::make_unique<pcl_movers::io::FrameStream<InputFrame>>(
-      [capture, read, in_bounds](InputFrame& f) {
+      [capture, state, in_bounds, look_ahead](InputFrame& f) {
+        if (state->error) std::rethrow_exception(std::exchange(state->error, nullptr));
         pcl_movers::io::VelodyneSweep sweep;
-        if (!in_bounds(*read) || !capture->next(sweep)) return false;
-        f.sweep = (*read)++;
+        if (!in_bounds(state->read)) return false;
+        if (state->ahead)
+          sweep = std::move(*std::exchange(state->ahead, nullptr));
+        else if (!capture->next(sweep))
+          return false;
+        f.sweep = state->read++;
         f.scan = sweep.cloud;
         f.time = sweep.start_time;
         f.time_offsets = std::move(sweep.time_offsets);
+        if (look_ahead && f.sweep == 0 && in_bounds(state->read)) {
+          auto next = std::make_unique<pcl_movers::io::VelodyneSweep>();
+          try {
+            if (capture->next(*next)) {
+              f.next_time = next->start_time;
+              state->ahead = std::move(next);
+            }
+          } catch (...) {
+            state->error = std::current_exception();
+          }
+        }
         return true;
       },
       o_.queue, o_.live ? QueuePolicy::kDropOldest : QueuePolicy::kBlock,
@@ -1162,10 +1191,13 @@ void DetectRun::applyDeskew(std::size_t i, InputFrame& f, const Eigen::Isometry3
   }
   const pcl_movers::StampedPose frame{pose, f.time, !estimate_};
   pcl_movers::StampedPose other = previous_pose_;
-  const double duration = sweepDuration(f.time_offsets);
-  if (!other.valid && frame.valid && duration > 0) {  // the first sweep: its end's pose
+  // The first sweep: the next sweep's pose at its start, as a folder's first frame takes it
+  // (a capture of one sweep: the pose at its last firing).
+  const double next =
+      std::isfinite(f.next_time) ? f.next_time : f.time + sweepDuration(f.time_offsets);
+  if (!other.valid && frame.valid && next > f.time) {
     try {
-      other = {sweep_poses_.at(f.sweep + 1, f.time + duration), f.time + duration, true};
+      other = {sweep_poses_.at(f.sweep + 1, next), next, true};
     } catch (const InputError&) {  // no pose after the first sweep: it stays as it is
     }
   }

@@ -86,9 +86,11 @@ void printHelp(const char* argv0) {
       "  each return came from (rows top to bottom) and its firing azimuth (the sensor's "
       "columns),\n"
       "  NaN where a laser gave no return; x forward, y left, z up; intensity = the sensor's\n"
-      "  reflectivity (0-255). times.txt holds each sweep's start from the packets' time stamps.\n"
-      "  The output is a sequence folder every pcl_movers tool reads. Partial turns at the start\n"
-      "  and end of the capture are left out.\n\n"
+      "  reflectivity (0-255); time (float) = the firing time in s after the sweep's start (NaN\n"
+      "  where no return), for pcl_movers_detect --deskew. times.txt holds each sweep's start\n"
+      "  (its first firing, s past the hour from the packets' time stamps), as pcl_movers_detect\n"
+      "  --pcap takes it. The output is a sequence folder every pcl_movers tool reads. Partial\n"
+      "  turns at the start and end of the capture are left out.\n\n"
       "Options (-h, --help: this help):\n%s",
       argv0, argv0, optionTable().help().c_str());
 }
@@ -131,7 +133,8 @@ void writeAtomically(const std::string& path, const Cloud& cloud, OutputGuard& g
   guard.created(path);
 }
 
-/** --pcap: the full sweeps of a Velodyne capture → OUT_FOLDER/frames/NNNNNN.pcd + times.txt. */
+/** --pcap: the full sweeps of a Velodyne capture → OUT_FOLDER/frames/NNNNNN.pcd (x y z intensity
+ * time) + times.txt. */
 int runCapture(const Options& opt, const std::string& output, bool columns_given) {
   pcl_movers::io::VelodyneModel model;
   try {
@@ -156,14 +159,15 @@ int runCapture(const Options& opt, const std::string& output, bool columns_given
     pcl_movers::io::SequenceWriter writer(output, opt.overwrite);
     std::vector<double> times;
     std::size_t returns = 0, collisions = 0;
-    const double t0 = sweep.start_time;
-    do {
-      writer.writeFrame(times.size(), *sweep.cloud);
-      times.push_back(sweep.start_time - t0);
+    do {  // each point's `time` after its sweep's start, the sweep's line of times.txt
+      writer.writeFrame(times.size(), *sweep.cloud, sweep.time_offsets);
+      times.push_back(sweep.start_time);
       returns += sweep.returns;
       collisions += sweep.collisions;
     } while (capture.next(sweep));
-    writer.writeTimes(times);
+    // The start times as pcl_movers_detect --pcap takes them, to the bit: a detection on this
+    // folder gives its tracks (times, velocities, de-skewing).
+    writer.writeTimes(times, true);
     pcl::console::print_info(
         "%s (%s): %zu data packets, %zu full sweeps of %d x %d, %.0f returns per sweep, %zu "
         "returns lost to a nearer one in their cell, %zu partial sweeps left out%s -> %s\n",

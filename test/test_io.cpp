@@ -3,6 +3,7 @@
  * SPDX-License-Identifier: BSD-3-Clause
  */
 #include <pcl_movers/io/ground_truth.h>
+#include <pcl_movers/io/point_times.h>
 #include <pcl_movers/io/sequence.h>
 #include <pcl_movers/io/tracks.h>
 
@@ -93,6 +94,29 @@ TEST(SequenceIO, RoundTripFramesPosesTimes) {
     EXPECT_TRUE(reader.pose(i).isApprox(poses[i], 1e-7));
     EXPECT_NEAR(reader.time(i), times[i], 1e-6);
   }
+}
+
+// Per-point times (a float `time` field, NaN kept) and times.txt to the bit (`exact`), as
+// pcl_movers_organize --pcap writes them.
+TEST(SequenceIO, TimedFramesAndExactTimes) {
+  TempDir dir;
+  const std::string seq = (dir.path() / "seq").string();
+  io::SequenceWriter writer(seq);
+  const auto cloud = makeCloud(4, 1.f);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const std::string path = writer.writeFrame(0, cloud, {0.f, 0.025f, nan, 0.0999f});
+  EXPECT_EQ(io::pointTimeField(path), "time");
+  const auto times = io::readPointTimes(path);
+  ASSERT_EQ(times.size(), 4u);
+  EXPECT_EQ(times[1], 0.025f);
+  EXPECT_TRUE(std::isnan(times[2]));
+  EXPECT_EQ(times[3], 0.0999f);
+  EXPECT_THROW(writer.writeFrame(1, cloud, {0.f}), InputError);  // one time per point
+  const std::vector<double> starts = {393.25332639999993, 393.3 + 1e-9, 0.1 * 3 + 400};
+  writer.writeTimes(starts, true);
+  EXPECT_EQ(io::readTimes(seq + "/times.txt"), starts);
+  writer.writeTimes(starts);  // microseconds
+  EXPECT_NE(io::readTimes(seq + "/times.txt"), starts);
 }
 
 TEST(SequenceIO, ViewpointIsThePoseWithoutPosesFile) {

@@ -1,11 +1,14 @@
 /*
  * Live and captured Velodyne input of the detector: pcl_movers_detect --pcap gives a simulated
- * scene's movers as its folder does; --live receives a capture replayed to 127.0.0.1 over UDP (a
- * small replayer here: the pcap records' 1206-byte payloads, paced at a few times real time);
- * no packets, a port in use, a missing capture or a wrong sensor fail with clear errors.
+ * scene's movers as its folder does, and the tracks of pcl_movers_organize --pcap's folder (per-
+ * point times, de-skewed); --live receives a capture replayed to 127.0.0.1 over UDP (a small
+ * replayer here: the pcap records' 1206-byte payloads, paced at a few times real time); no
+ * packets, a port in use, a missing capture or a wrong sensor fail with clear errors.
  * SPDX-License-Identifier: BSD-3-Clause
  */
 #include <pcl_movers/io/pcap_file.h>
+#include <pcl_movers/io/point_times.h>
+#include <pcl_movers/io/sequence.h>
 #include <pcl_movers/io/tracks.h>
 #include <pcl_movers/io/velodyne_capture.h>
 
@@ -16,6 +19,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -153,6 +157,77 @@ TEST_F(LiveInput, PcapGivesTheFolderMovers) {
   EXPECT_EQ(jsonNumber(summary, "dropped_frames"), 0);
   EXPECT_TRUE(std::filesystem::exists(out("pcap") + "/labelled/000005.pcd"));
   EXPECT_TRUE(std::filesystem::exists(out("pcap") + "/tracks.json"));
+}
+
+// pcl_movers_organize --pcap keeps each point's firing time: a float `time` field [s after the
+// sweep's start, its line of times.txt; NaN without return], the simulator's and the Velodyne
+// driver's layout. Detection on its folder then de-skews as on the capture and gives its tracks.csv
+// to the byte (times.txt = the sweep starts detect --pcap uses; the first sweep takes the next
+// sweep's pose at its start on both paths). A rolling hdl32 sweep of the sample scene, 8 frames.
+TEST(OrganizedCapture, KeepsPointTimesAndDetectsAsThePcap) {
+  if (!test_util::toolBuilt("detect") || !test_util::toolBuilt("simulate") ||
+      !test_util::toolBuilt("organize"))
+    GTEST_SKIP() << "pcl_movers_detect / simulate / organize not built";
+  const TempDir dir("pcl_movers_organized_capture");
+  const std::string d = dir.str() + "/";
+  std::string yaml = readFile(PCL_MOVERS_SOURCE_DIR "/data/scenarios/sample.yaml");
+  const std::string dropout = "  dropout: 0.01\n";
+  ASSERT_NE(yaml.find(dropout), std::string::npos);
+  yaml.insert(yaml.find(dropout) + dropout.size(), "  sweep: rolling\n");
+  test_util::writeFile(d + "rolling.yaml", yaml);
+  auto r = runTool("simulate", {d + "rolling.yaml", d + "seq", "--sensor", "hdl32", "--frames", "8",
+                                "--pcap", d + "scene.pcap"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = runTool("organize", {"--pcap", d + "scene.pcap", d + "org"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+
+  const auto sweeps =
+      pcl_movers::io::readVelodyneCapture(d + "scene.pcap", pcl_movers::io::VelodyneModel::kHdl32);
+  const pcl_movers::io::SequenceReader folder(d + "org");
+  ASSERT_EQ(folder.size(), 8u);
+  ASSERT_EQ(sweeps.size(), folder.size());
+  for (std::size_t i = 0; i < folder.size(); ++i) {
+    const std::string& path = folder.framePaths()[i];
+    EXPECT_EQ(folder.time(i), sweeps[i].start_time) << path;  // exactly
+    ASSERT_EQ(pcl_movers::io::pointTimeField(path), "time") << path;
+    const auto times = pcl_movers::io::readPointTimes(path);
+    pcl::PointCloud<pcl::PointXYZI> cloud;
+    folder.read(i, cloud);
+    ASSERT_EQ(times.size(), cloud.size()) << path;
+    std::size_t returns = 0;
+    float last = 0;
+    for (std::size_t k = 0; k < cloud.size(); ++k) {
+      const bool valid = std::isfinite(cloud[k].x);
+      ASSERT_EQ(valid, std::isfinite(times[k])) << path << " point " << k;
+      if (!valid) continue;
+      ++returns;
+      EXPECT_EQ(times[k], sweeps[i].time_offsets[k]);
+      ASSERT_GE(times[k], 0.f) << path << " point " << k;
+      ASSERT_LT(times[k], 0.101f) << path << " point " << k;  // one turn at 10 Hz, ±0.1 ms
+      if (i + 1 < folder.size())  // before the next sweep's first firing
+        ASSERT_LT(folder.time(i) + times[k], folder.time(i + 1)) << path << " point " << k;
+      last = std::max(last, times[k]);
+    }
+    EXPECT_GT(returns, 20000u) << path;
+    EXPECT_GT(last, 0.09f) << path;  // the whole turn
+  }
+
+  const std::string poses = d + "seq/poses.txt";
+  r = runTool("detect", {"--pcap", d + "scene.pcap", d + "det_pcap", "--sensor", "hdl32", "--poses",
+                         poses, "--deskew", "on"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = runTool("detect", {d + "org", d + "det_folder", "--sensor", "hdl32", "--poses", poses,
+                         "--deskew", "on"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string summary_pcap = readFile(d + "det_pcap/summary.json");
+  const std::string summary_folder = readFile(d + "det_folder/summary.json");
+  EXPECT_NE(summary_pcap.find("\"time_field\": \"packets\", \"frames\": 8"), std::string::npos)
+      << summary_pcap;
+  EXPECT_NE(summary_folder.find("\"time_field\": \"time\", \"frames\": 8"), std::string::npos)
+      << summary_folder;
+  const std::string tracks = readFile(d + "det_pcap/tracks.csv");
+  EXPECT_GT(pcl_movers::io::readTracks(d + "det_pcap/tracks.csv").size(), 50u);
+  EXPECT_EQ(readFile(d + "det_folder/tracks.csv"), tracks);
 }
 
 TEST_F(LiveInput, DetectsAReplayedCaptureOverUdp) {

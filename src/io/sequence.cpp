@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -20,6 +21,27 @@
 #include <iterator>
 #include <map>
 #include <sstream>
+#include <string_view>
+
+namespace pcl_movers {
+namespace io {
+namespace detail {
+/** A point with a per-point time [s after the frame's time], Velodyne-driver style. */
+struct EIGEN_ALIGN16 PointXYZIT {
+  PCL_ADD_POINT4D;
+  float intensity;
+  float time;
+  PCL_MAKE_ALIGNED_OPERATOR_NEW
+};
+}  // namespace detail
+}  // namespace io
+}  // namespace pcl_movers
+
+// clang-format off
+POINT_CLOUD_REGISTER_POINT_STRUCT(pcl_movers::io::detail::PointXYZIT,
+                                  (float, x, x)(float, y, y)(float, z, z)
+                                  (float, intensity, intensity)(float, time, time))
+// clang-format on
 
 namespace fs = std::filesystem;
 
@@ -529,11 +551,21 @@ std::vector<double> readTimes(const std::string& path) {
   return times;
 }
 
-void writeTimes(const std::string& path, const std::vector<double>& times) {
+void writeTimes(const std::string& path, const std::vector<double>& times, bool exact) {
   std::ofstream out(path);
   if (!out) throw InputError(path, 0, "cannot write times file");
   out << std::fixed << std::setprecision(6);
-  for (double t : times) out << t << '\n';
+  for (const double t : times) {
+    if (exact) {  // fixed notation, the fewest decimals that read back to `t`
+      char text[400];
+      const auto r = std::to_chars(text, text + sizeof(text), t, std::chars_format::fixed);
+      if (r.ec == std::errc()) {
+        out << std::string_view(text, std::size_t(r.ptr - text)) << '\n';
+        continue;
+      }
+    }
+    out << t << '\n';
+  }
   if (!out) throw InputError(path, 0, "write failed");
 }
 
@@ -846,13 +878,16 @@ SequenceWriter::SequenceWriter(const std::string& folder, bool overwrite) : fold
   if (ec) throw InputError(framesFolder(), 0, "cannot create folder: " + ec.message());
 }
 
+namespace {
+
+/** Writes `cloud` as frames/NNNNNN.pcd of `writer` (binary) under a temporary name, then renames
+ * it, so an interrupted run never leaves a half file. Returns the path. */
 template <typename PointT>
-std::string SequenceWriter::writeFrame(std::size_t index,
-                                       const pcl::PointCloud<PointT>& cloud) const {
+std::string saveFrame(const SequenceWriter& writer, std::size_t index,
+                      const pcl::PointCloud<PointT>& cloud) {
   std::ostringstream name;
   name << std::setw(6) << std::setfill('0') << index << ".pcd";
-  const std::string path = (fs::path(framesFolder()) / name.str()).string();
-  // Write under a temporary name and rename, so an interrupted run never leaves a half file.
+  const std::string path = (fs::path(writer.framesFolder()) / name.str()).string();
   const std::string tmp = path + ".tmp";
   if (pcl::io::savePCDFileBinary(tmp, cloud) < 0) {
     std::error_code ec;
@@ -863,12 +898,45 @@ std::string SequenceWriter::writeFrame(std::size_t index,
   return path;
 }
 
+}  // namespace
+
+template <typename PointT>
+std::string SequenceWriter::writeFrame(std::size_t index,
+                                       const pcl::PointCloud<PointT>& cloud) const {
+  return saveFrame(*this, index, cloud);
+}
+
+std::string SequenceWriter::writeFrame(std::size_t index,
+                                       const pcl::PointCloud<pcl::PointXYZI>& cloud,
+                                       const std::vector<float>& times) const {
+  if (times.size() != cloud.size())
+    throw InputError(framesFolder(), 0,
+                     "frame " + std::to_string(index) + ": " + std::to_string(times.size()) +
+                         " point times for " + std::to_string(cloud.size()) + " points");
+  pcl::PointCloud<detail::PointXYZIT> out;
+  out.width = cloud.width;
+  out.height = cloud.height;
+  out.is_dense = cloud.is_dense;
+  out.sensor_origin_ = cloud.sensor_origin_;
+  out.sensor_orientation_ = cloud.sensor_orientation_;
+  out.points.resize(cloud.size());
+  for (std::size_t k = 0; k < cloud.size(); ++k) {
+    detail::PointXYZIT& p = out.points[k];
+    p.x = cloud.points[k].x;
+    p.y = cloud.points[k].y;
+    p.z = cloud.points[k].z;
+    p.intensity = cloud.points[k].intensity;
+    p.time = times[k];
+  }
+  return saveFrame(*this, index, out);
+}
+
 void SequenceWriter::writePoses(const std::vector<Eigen::Isometry3d>& poses) const {
   io::writePoses((fs::path(folder_) / "poses.txt").string(), poses);
 }
 
-void SequenceWriter::writeTimes(const std::vector<double>& times) const {
-  io::writeTimes((fs::path(folder_) / "times.txt").string(), times);
+void SequenceWriter::writeTimes(const std::vector<double>& times, bool exact) const {
+  io::writeTimes((fs::path(folder_) / "times.txt").string(), times, exact);
 }
 
 #define PCL_MOVERS_INSTANTIATE_SEQUENCE_IO(T)                         \

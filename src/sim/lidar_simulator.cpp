@@ -6,7 +6,6 @@
 #include <pcl_movers/sim/lidar_simulator.h>
 #include <pcl_movers/sim/scene_families.h>
 
-#include <pcl/io/pcd_io.h>
 #include <pcl/point_types.h>
 
 #include <algorithm>
@@ -16,24 +15,6 @@
 #include <iomanip>
 #include <limits>
 #include <sstream>
-
-namespace pcl_movers {
-namespace sim {
-/** \brief A point with a per-point time [s after the frame time], Velodyne-driver style. */
-struct EIGEN_ALIGN16 PointXYZIT {
-  PCL_ADD_POINT4D;
-  float intensity;
-  float time;
-  PCL_MAKE_ALIGNED_OPERATOR_NEW
-};
-}  // namespace sim
-}  // namespace pcl_movers
-
-// clang-format off
-POINT_CLOUD_REGISTER_POINT_STRUCT(pcl_movers::sim::PointXYZIT,
-                                  (float, x, x)(float, y, y)(float, z, z)
-                                  (float, intensity, intensity)(float, time, time))
-// clang-format on
 
 namespace pcl_movers {
 namespace sim {
@@ -1043,36 +1024,6 @@ void LidarSimulator::simulate(int frame, pcl::PointCloud<pcl::PointXYZI>& cloud,
 
 // ------------------------------------------------------------------ writing a sequence
 
-namespace {
-
-/** Rewrites the frame at `path` with a per-point `time` field (seconds after the frame time, the
- * time of the point's column), as the Velodyne driver writes it. */
-void writeTimedFrame(const std::string& path, const pcl::PointCloud<pcl::PointXYZI>& cloud,
-                     const LidarSimulator& sim) {
-  pcl::PointCloud<PointXYZIT> out;
-  out.width = cloud.width;
-  out.height = cloud.height;
-  out.is_dense = cloud.is_dense;
-  out.points.resize(cloud.size());
-  for (std::size_t k = 0; k < cloud.size(); ++k) {
-    PointXYZIT& p = out.points[k];
-    p.x = cloud.points[k].x;
-    p.y = cloud.points[k].y;
-    p.z = cloud.points[k].z;
-    p.intensity = cloud.points[k].intensity;
-    p.time = float(sim.columnTime(int(k % cloud.width)));
-  }
-  const std::string tmp = path + ".tmp";
-  if (pcl::io::savePCDFileBinary(tmp, out) < 0) {
-    std::error_code ec;
-    fs::remove(tmp, ec);
-    throw InputError(path, 0, "cannot write PCD with point times");
-  }
-  fs::rename(tmp, path);
-}
-
-}  // namespace
-
 void writeSequence(const LidarSimulator& sim, const std::string& folder, bool overwrite,
                    const std::function<void(std::size_t, std::size_t)>& progress) {
   std::error_code ec;
@@ -1094,11 +1045,19 @@ void writeSequence(const LidarSimulator& sim, const std::string& folder, bool ov
     std::vector<io::GroundTruthObject> all_objects, objects;
     pcl::PointCloud<pcl::PointXYZI> cloud;
     std::vector<std::uint32_t> labels;
+    const bool rolling = sim.getScenario().sensor.sweep == "rolling";
+    std::vector<float> point_times;
     for (int f = 0; f < n; ++f) {
       Eigen::Isometry3d pose;
       sim.simulate(f, cloud, labels, objects, pose);
-      const std::string frame_path = writer.writeFrame(std::size_t(f), cloud);
-      if (sim.getScenario().sensor.sweep == "rolling") writeTimedFrame(frame_path, cloud, sim);
+      if (rolling) {  // each point at its column's time, as the Velodyne driver writes it
+        point_times.resize(cloud.size());
+        for (std::size_t k = 0; k < cloud.size(); ++k)
+          point_times[k] = float(sim.columnTime(int(k % cloud.width)));
+        writer.writeFrame(std::size_t(f), cloud, point_times);
+      } else {
+        writer.writeFrame(std::size_t(f), cloud);
+      }
       std::ostringstream name;
       name << std::setw(6) << std::setfill('0') << f << ".label";
       io::writeLabels((tmp / "labels" / name.str()).string(), labels);

@@ -75,7 +75,9 @@ std::vector<Eigen::Isometry3d> readPoses(const std::string& path);
 void writePoses(const std::string& path, const std::vector<Eigen::Isometry3d>& poses);
 /** \brief Reads one timestamp (seconds) per line. */
 std::vector<double> readTimes(const std::string& path);
-void writeTimes(const std::string& path, const std::vector<double>& times);
+/** \brief Writes one timestamp (seconds) per line: with 6 decimals (µs), or with `exact` the
+ * shortest decimals that read back (readTimes()) to the same double. */
+void writeTimes(const std::string& path, const std::vector<double>& times, bool exact = false);
 
 /** \brief How SequenceReader::open() finds times and poses. */
 struct SequenceOptions {
@@ -169,8 +171,15 @@ class SequenceWriter {
   /** \brief Writes frames/NNNNNN.pcd (index zero-padded to 6 digits). Returns the path. */
   template <typename PointT>
   std::string writeFrame(std::size_t index, const pcl::PointCloud<PointT>& cloud) const;
+  /** \brief Writes frames/NNNNNN.pcd with a per-point float `time` field after x y z intensity
+   * (`times`: one per point, seconds after the frame's time in times.txt, NaN allowed), as the
+   * Velodyne driver writes it and readPointTimes() reads it. Throws InputError when the sizes
+   * differ. Returns the path. */
+  std::string writeFrame(std::size_t index, const pcl::PointCloud<pcl::PointXYZI>& cloud,
+                         const std::vector<float>& times) const;
   void writePoses(const std::vector<Eigen::Isometry3d>& poses) const;
-  void writeTimes(const std::vector<double>& times) const;
+  /** \brief Writes times.txt (see io::writeTimes()). */
+  void writeTimes(const std::vector<double>& times, bool exact = false) const;
   const std::string& folder() const { return folder_; }
   std::string framesFolder() const { return folder_ + "/frames"; }
 
