@@ -141,6 +141,37 @@ TEST(MoverTracker, CrossingMoversKeepIdentities) {
   }
 }
 
+// An ego at 25 m/s is overtaken by a car at 35 m/s in the next lane (3.5 m a frame in the world,
+// beyond the birth gate of an object at rest or walking), beside a parked car. The new track must
+// find its second view (registered confidently), start from the two views' velocity and keep
+// one identity; the parked car stays put and is never a mover. In centroid mode (no registration
+// to vouch for a far view) the birth gate is the velocity prior's, as before.
+TEST(MoverTracker, FastCarIsFoundOnItsSecondFrame) {
+  Tracker tracker;
+  tracker.setParameters(defaults());
+  std::set<int> ids;
+  int first_mover = -1, parked_mover_frames = 0;
+  Eigen::Vector2d last_velocity = Eigen::Vector2d::Zero();
+  for (int k = 0; k < 20; ++k) {
+    const double t = 0.1 * k;
+    const Eigen::Vector3d sensor(25.0 * t, 0, 1.7);
+    SceneBuilder scene;
+    scene.addBox(sensor, Eigen::Vector2d(-12 + 35.0 * t, 3.5), 0, 4.5, 1.8, 1.5);
+    scene.addBox(sensor, Eigen::Vector2d(30, -6), 0, 4.5, 1.8, 1.5);  // parked
+    const auto results = step(tracker, scene, sensor, t);
+    ASSERT_EQ(results.size(), 2u);
+    ids.insert(results[0].track_id);
+    if (results[0].mover && first_mover < 0) first_mover = k;
+    parked_mover_frames += results[1].mover;
+    last_velocity = results[0].velocity.head<2>();
+  }
+  EXPECT_EQ(ids.size(), 1u) << "the fast car was re-born";
+  EXPECT_GE(first_mover, 0);
+  EXPECT_LE(first_mover, 8);
+  EXPECT_NEAR(last_velocity.x(), 35.0, 1.5);
+  EXPECT_EQ(parked_mover_frames, 0);
+}
+
 // A mover disappears for 3 frames (occlusion) and must be re-acquired by the same track.
 TEST(MoverTracker, OccludedMoverIsReacquired) {
   Tracker tracker;

@@ -482,6 +482,11 @@ class MoverTracker {
                             bool occluded, double time, double range, double since,
                             bool reanchor = false) const;
 
+  /** \brief At a track's second view, outside its velocity prior's gate: restarts the filter
+   * from the two views (position `measured`, velocity their difference / `since`) and returns
+   * true; else false (the caller updates the filter as usual). */
+  bool startsFast(Track& t, const Eigen::Vector2d& measured, const Eigen::Matrix2d& meas_cov,
+                  double since) const;
   /** \brief Height of a cluster for the mover height test: its top above what it stands on
    * (ClusterFeatures::floor_z, decision.standing_height), at least its own extent. */
   double standingHeight(const ClusterFeatures& features) const;

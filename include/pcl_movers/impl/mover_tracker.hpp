@@ -1023,7 +1023,14 @@ void MoverTracker<PointT>::gateTrack(std::size_t ti, const Frame& frame,
       std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(S, Eigen::EigenvaluesOnly)
                         .eigenvalues()
                         .maxCoeff()));
-  const double search = std::min(p.track.max_gate_radius, p.track.gate_sigmas * sigma + accel_term);
+  const double prior_search =
+      std::min(p.track.max_gate_radius, p.track.gate_sigmas * sigma + accel_term);
+  // A registered track seen once may be as fast as traffic: its second view is searched as far
+  // as any track's, whatever its velocity prior (a 33 m/s car moves 3.3 m a frame), but a view
+  // beyond the prior's gate is taken only when it registers confidently onto the model (below);
+  // startsFast() then takes the velocity from the two views.
+  const bool search_fast = frame.use_registration && track.model && track.hits < 2;
+  const double search = search_fast ? p.track.max_gate_radius : prior_search;
   // Gated candidates that need a registration, with their centroid distances (see below).
   to_register.clear();
   for (std::size_t c = 0; c < candidates.size(); ++c) {
@@ -1118,6 +1125,7 @@ void MoverTracker<PointT>::gateTrack(std::size_t ti, const Frame& frame,
       continue;
     }
     const bool confident = m.similarity >= p.registration.stop_similarity;
+    if (!confident && distance > prior_search + p.track.gate_margin) continue;
     if (confident && track.missed == 0) claimed[c] = 1;
     association.matches.push_back(std::move(m));
     // A fragment of the object (a walker's legs cut from the body by a dropped row) can match
@@ -1135,6 +1143,22 @@ void MoverTracker<PointT>::seeStill(Track& t, const Candidate& cand, ClusterResu
   t.features = cand.features;
   ++t.since_registration;
   report(t, t.similarity, r);
+}
+
+template <typename PointT>
+bool MoverTracker<PointT>::startsFast(Track& t, const Eigen::Vector2d& measured,
+                                      const Eigen::Matrix2d& meas_cov, double since) const {
+  if (t.hits != 1 || t.reacquired) return false;
+  // A track's second view: its velocity prior (initial_velocity_sigma) is that of most objects,
+  // at rest or walking. A view that prior cannot explain (outside its gate) is of a fast object:
+  // the track starts from the velocity of its two views instead, as a diffuse prior would give.
+  const Eigen::Vector2d shift = measured - t.filter.position();
+  const Eigen::Matrix2d S = t.filter.innovationCovariance(meas_cov);
+  const double gate = parameters_.track.gate_sigmas;
+  if (!(shift.dot(S.ldlt().solve(shift)) > gate * gate)) return false;
+  const double sigma = std::sqrt(meas_cov(0, 0));
+  t.filter.initialize(measured, meas_cov, shift / since, std::sqrt(2.0) * sigma / since);
+  return true;
 }
 
 template <typename PointT>
@@ -1166,8 +1190,9 @@ void MoverTracker<PointT>::updateTrack(const Match& m, const Frame& frame,
                p.track.measurement_sigma_per_metre * range);
   const Eigen::Vector2d v_before = t.filter.velocity();
   const double since = std::max(1e-3, frame.time - t.last_time);
-  t.filter.update(m.measurement.template head<2>(),
-                  Eigen::Matrix2d::Identity() * meas_sigma * meas_sigma);
+  const Eigen::Matrix2d meas_cov = Eigen::Matrix2d::Identity() * meas_sigma * meas_sigma;
+  if (!(registered && startsFast(t, m.measurement.template head<2>(), meas_cov, since)))
+    t.filter.update(m.measurement.template head<2>(), meas_cov);
   // Acceleration limit on established tracks: the filter's velocity may not change faster than a
   // vehicle can accelerate (a single bad measurement cannot make a static object a mover).
   if (t.hits >= p.decision.min_age)
