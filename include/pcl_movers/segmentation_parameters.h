@@ -33,10 +33,10 @@ struct SegmentationParameters {
   double row_bridge = 0.0;
 
   /// Clusters with fewer points are ignored (noise, too small to track). 8, two under the 10 box
-  /// points of a scored target (docs/design.md): the ground filter takes a far walker's feet, so a
-  /// 10-12-point pedestrian at 45-60 m left 8-10-point clusters, and at 10 its track was born or
-  /// lost every other frame (open pedestrian 5 confirmed 18 frames after it became visible, 7 at
-  /// 8).
+  /// points of a scored target (docs/design_history.md): the ground filter takes a far walker's
+  /// feet, so a 10-12-point pedestrian at 45-60 m left 8-10-point clusters, and at 10 its track was
+  /// born or lost every other frame (open pedestrian 5 confirmed 18 frames after it became visible,
+  /// 7 at 8).
   int min_cluster_points = 8;
 
   /** \brief Throws InputError naming the first setting out of its range; `prefix` names the

@@ -25,7 +25,7 @@ struct RegistrationParameters {
   /// (0.0029 rad at 2200 columns), the horizontal spacing of the samples, as the paper's σ
   /// "proportional to the sampling density" asks. At 0.01 (before) a car at 80 m was blurred
   /// over σ = 0.8 m, three times its sample spacing: velocity RMS open / urban / wooded 0.208 /
-  /// 0.326 / 0.245 m/s, now 0.129 / 0.298 / 0.155 (docs/design.md).
+  /// 0.326 / 0.245 m/s, now 0.129 / 0.298 / 0.155 (docs/design_history.md).
   double sigma_per_metre = 0.003;
   double min_sigma = 0.1;
 

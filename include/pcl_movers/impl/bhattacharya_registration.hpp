@@ -707,7 +707,7 @@ void BhattacharyaRegistration<PointSource, PointTarget, Scalar>::search(
   // the samples fall on it, where a quadratic in B on samples off the top is biased (near
   // objects: σ = half a cell). The re-centring below fits on samples symmetric about the peak,
   // where the quadratic in B is unbiased, and stays on B (on log B it lost the track of a van
-  // passing the sensor on KITTI city-22; docs/design.md).
+  // passing the sensor on KITTI city-22; docs/design_history.md).
   auto logB = [](float b) { return std::log(std::max(b, kLogFloor)); };
   const bool active[4] = {bdx > -nr && bdx<nr, bdy> - nr && bdy<nr, nrz> 0 && bdz > -nrz &&
                           bdz<nrz, layers> 1 && bl > 0 && bl < layers - 1};
