@@ -164,7 +164,7 @@ TEST_F(LiveInput, PcapGivesTheFolderMovers) {
 // driver's layout. Detection on its folder then de-skews as on the capture and gives its tracks.csv
 // to the byte (times.txt = the sweep starts detect --pcap uses; the first sweep takes the next
 // sweep's pose at its start on both paths). A rolling hdl32 sweep of the sample scene, 8 frames.
-TEST(OrganizedCapture, KeepsPointTimesAndDetectsAsThePcap) {
+TEST(VelodyneCapture, OrganizeKeepsPointTimesAndDetectsAsThePcap) {
   if (!test_util::toolBuilt("detect") || !test_util::toolBuilt("simulate") ||
       !test_util::toolBuilt("organize"))
     GTEST_SKIP() << "pcl_movers_detect / simulate / organize not built";
