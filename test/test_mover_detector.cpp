@@ -62,10 +62,9 @@ struct SampleFrames {
   std::vector<double> times;
 };
 
-SampleFrames simulateSample(int frames) {
+/** The first `frames` frames of `simulator`'s scene, in memory. */
+SampleFrames simulateFrames(pcl_movers::sim::LidarSimulator& simulator, int frames) {
   SampleFrames f;
-  const std::string path = std::string(PCL_MOVERS_SOURCE_DIR) + "/data/scenarios/sample.yaml";
-  pcl_movers::sim::LidarSimulator simulator(pcl_movers::sim::loadScenario(path));
   for (int i = 0; i < frames; ++i) {
     f.scans.emplace_back(new pcl::PointCloud<PointT>);
     std::vector<std::uint32_t> labels;
@@ -76,6 +75,12 @@ SampleFrames simulateSample(int frames) {
     f.times.push_back(simulator.time(i));
   }
   return f;
+}
+
+SampleFrames simulateSample(int frames) {
+  const std::string path = std::string(PCL_MOVERS_SOURCE_DIR) + "/data/scenarios/sample.yaml";
+  pcl_movers::sim::LidarSimulator simulator(pcl_movers::sim::loadScenario(path));
+  return simulateFrames(simulator, frames);
 }
 
 /** Rows of a detector run over `f` with every pose moved by `offset`; the frames in `blind` get
@@ -461,18 +466,11 @@ movers:
   - {type: car, start: [36, -16], heading: 90, speed: 8}
 )";
   pcl_movers::sim::LidarSimulator simulator(pcl_movers::sim::parseScenario(yaml, "one_beam"));
-  SampleFrames f;
+  const SampleFrames f = simulateFrames(simulator, 40);
   double tallest_slice = 0;
-  for (int i = 0; i < 40; ++i) {
-    f.scans.emplace_back(new pcl::PointCloud<PointT>);
-    std::vector<std::uint32_t> labels;
-    std::vector<GroundTruthObject> truth;
-    Eigen::Isometry3d pose;
-    simulator.simulate(i, *f.scans.back(), labels, truth, pose);
-    f.poses.push_back(pose);
-    f.times.push_back(simulator.time(i));
+  for (const auto& scan : f.scans) {
     float lo = 1e9f, hi = -1e9f;  // the car's returns (everything above the road)
-    for (const auto& p : *f.scans.back())
+    for (const auto& p : *scan)
       if (std::isfinite(p.z) && p.z > -1.5f) {
         lo = std::min(lo, p.z);
         hi = std::max(hi, p.z);

@@ -223,8 +223,9 @@ class MoverDetector {
   std::vector<std::uint8_t> occluded_;  ///< occluded sides of each cluster (last frame)
   /// Cell labels of the last frame's range image, shared by occludedSides() and occluderFloors()
   typename RangeImageRegionGrowing<PointT>::CellLabels cell_labels_;
-  std::vector<int> floors_;      ///< per cluster: lowest point of a nearer object below, or -1
-  std::vector<double> floor_z_;  ///< the same as world z (NaN: none), for the tracker
+  std::vector<int> floors_;          ///< per cluster: lowest point of a nearer object below, or -1
+  std::vector<double> floor_z_;      ///< what each cluster stands on, world z (NaN: none), tracker
+  std::vector<float> ground_under_;  ///< groundFloors()' work buffer, kept between frames
   StageObject<RangeImageOrganizer<PointT>> organizer_;
   StageObject<GroundPlaneFilter<PointT>> ground_;
   StageObject<RangeImageRegionGrowing<PointT>> segmenter_;

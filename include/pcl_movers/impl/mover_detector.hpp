@@ -193,7 +193,7 @@ void MoverDetector<PointT>::groundFloors(const PointCloud& world,
   if (!ground_.object) return;
   const std::vector<float>& height = ground_.object->getPointHeights();
   floor_z_.resize(clusters.size(), std::numeric_limits<double>::quiet_NaN());
-  std::vector<float> under;
+  std::vector<float>& under = ground_under_;
   for (std::size_t c = 0; c < clusters.size(); ++c) {
     under.clear();
     const auto& idx = clusters[c].indices;
