@@ -37,6 +37,7 @@ rules=(
   "free-space test|--free_space.lag 0|a mover must occupy space seen empty"
   "long-lag free space|--free_space.long_lag 0|a second, longer lag for slow and far objects"
   "silent rays seen empty|--free_space.no_return 0|downward no-returns count as empty space"
+  "motion-aware split|--free_space.split 0|a cluster's seen-through part split off its static rest"
 )
 
 echo "## Ablation of the detector's rules (tune split)"

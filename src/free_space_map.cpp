@@ -20,6 +20,7 @@ void FreeSpaceMap::setResolution(double azimuth_deg, double elevation_deg) {
   rows_ = static_cast<int>(std::ceil((max_el_deg_ - min_el_deg_) / el_res_deg_));
   scans_.clear();  // stored images have the old layout
   indexBeamRows();
+  indexGroundRows();
 }
 
 void FreeSpaceMap::computeCells(const float* xs, const float* ys, const float* zs, std::size_t n,
@@ -73,6 +74,12 @@ bool FreeSpaceMap::rowPassesOverGround(int row) const {
   return passesOverGround(static_cast<float>(std::sin(el)));
 }
 
+void FreeSpaceMap::indexGroundRows() {
+  over_ground_rows_.resize(static_cast<std::size_t>(rows_));
+  for (int r = 0; r < rows_; ++r)
+    over_ground_rows_[static_cast<std::size_t>(r)] = rowPassesOverGround(r) ? 1 : 0;
+}
+
 void FreeSpaceMap::indexBeamRows() {
   const auto rows = static_cast<std::size_t>(rows_);
   beam_rows_.assign(rows, 0);
@@ -106,6 +113,50 @@ void FreeSpaceMap::windowRows(int row, int& lo, int& hi) const {
   hi = std::min(hi, rows_ - 1);
 }
 
+FreeSpaceMap::Sight FreeSpaceMap::judgePoint(const Scan& s, const Eigen::Vector3f& w) const {
+  const Eigen::Vector3f q = s.world_to_sensor * w;
+  const float rxy = std::sqrt(q.x() * q.x() + q.y() * q.y());
+  const float d = std::sqrt(rxy * rxy + q.z() * q.z());
+  if (!(d > 0.5f)) return Sight::kUnknown;
+  const int row = cellRow(detail::fastAtan2Deg(q.z(), rxy));
+  const int col = cellCol(detail::fastAtan2Deg(q.y(), q.x()));
+  // Nearest return over the window: a ray that passed just beside an edge never counts.
+  float nearest = 0.0f;
+  int lo = 0, hi = -1;
+  windowRows(row, lo, hi);
+  bool beam = false;  // one of the window's rows is a beam of the sensor
+  bool lost = false;  // a beam cell there should have returned (the ground) but did not
+  for (int r = lo; r <= hi; ++r) {
+    if (!beam_rows_[static_cast<std::size_t>(r)]) continue;
+    beam = true;
+    const bool steep = !over_ground_rows_[static_cast<std::size_t>(r)];
+    for (int dc = -win_cols_; dc <= win_cols_; ++dc) {
+      int c = col + dc;
+      c = c >= cols_ ? c - cols_ : (c < 0 ? c + cols_ : c);
+      const float v = s.range[static_cast<std::size_t>(r) * cols_ + c];
+      if (v > 0.0f && (nearest == 0.0f || v < nearest)) nearest = v;
+      lost = lost || (v == 0.0f && steep);
+    }
+  }
+  // A lost return may have been something closer than the sensor's minimum range, right in
+  // front of the point: what the other rays saw says nothing then.
+  if (lost) return Sight::kUnknown;
+  const float margin = static_cast<float>(std::max(margin_, margin_per_metre_ * d));
+  if (nearest == 0.0f) {
+    // Nothing returned around there: unknown, unless the direction points down and a beam was
+    // cast there (see setNoReturnRange()). Not within the sensor's minimum range of that scan
+    // either: a return closer than the shortest one reported would not have been reported (a van
+    // beside the path, closer than a 3 m minimum range, was silent and "seen through").
+    if (!(q.z() < 0.0f && beam && passesOverGround(q.z() / d) && d > s.min_range + margin &&
+          no_return_range_ > 0))
+      return Sight::kUnknown;
+    // Seen empty up to the no-return range only: nothing is known beyond it.
+    return no_return_range_ > d + margin ? Sight::kThrough : Sight::kBefore;
+  }
+  if (nearest > d + margin) return Sight::kThrough;
+  return nearest >= d - margin ? Sight::kAt : Sight::kBefore;
+}
+
 FreeSpaceMap::Evidence FreeSpaceMap::test(const std::vector<Eigen::Vector3f>& world_points,
                                           int frames_ago) const {
   Evidence e;
@@ -113,47 +164,21 @@ FreeSpaceMap::Evidence FreeSpaceMap::test(const std::vector<Eigen::Vector3f>& wo
   const Scan& s = scans_[static_cast<std::size_t>(frames_ago)];
   if (s.range.empty()) return e;  // a blind frame saw nothing
   for (const auto& w : world_points) {
-    const Eigen::Vector3f q = s.world_to_sensor * w;
-    const float rxy = std::sqrt(q.x() * q.x() + q.y() * q.y());
-    const float d = std::sqrt(rxy * rxy + q.z() * q.z());
-    if (!(d > 0.5f)) continue;
-    const int row = cellRow(detail::fastAtan2Deg(q.z(), rxy));
-    const int col = cellCol(detail::fastAtan2Deg(q.y(), q.x()));
-    // Nearest return over the window: a ray that passed just beside an edge never counts.
-    float nearest = 0.0f;
-    int lo = 0, hi = -1;
-    windowRows(row, lo, hi);
-    bool beam = false;  // one of the window's rows is a beam of the sensor
-    bool lost = false;  // a beam cell there should have returned (the ground) but did not
-    for (int r = lo; r <= hi; ++r) {
-      if (!beam_rows_[static_cast<std::size_t>(r)]) continue;
-      beam = true;
-      const bool steep = !rowPassesOverGround(r);
-      for (int dc = -win_cols_; dc <= win_cols_; ++dc) {
-        int c = col + dc;
-        c = c >= cols_ ? c - cols_ : (c < 0 ? c + cols_ : c);
-        const float v = s.range[static_cast<std::size_t>(r) * cols_ + c];
-        if (v > 0.0f && (nearest == 0.0f || v < nearest)) nearest = v;
-        lost = lost || (v == 0.0f && steep);
-      }
-    }
-    // A lost return may have been something closer than the sensor's minimum range, right in
-    // front of the point: what the other rays saw says nothing then.
-    if (lost) continue;
-    // Nothing returned around there: unknown, unless the direction points down and a beam was
-    // cast there (see setNoReturnRange()).
-    const float margin = static_cast<float>(std::max(margin_, margin_per_metre_ * d));
-    // Not within the sensor's minimum range of that scan either: a return closer than the
-    // shortest one reported would not have been reported (a van beside the path, closer than a
-    // 3 m minimum range, was silent and "seen through").
-    if (nearest == 0.0f && q.z() < 0.0f && beam && passesOverGround(q.z() / d) &&
-        d > s.min_range + margin)
-      nearest = static_cast<float>(no_return_range_);
-    if (nearest == 0.0f) continue;
+    const Sight sight = judgePoint(s, w);
+    if (sight == Sight::kUnknown) continue;
     ++e.tested;
-    if (nearest > d + margin) ++e.seen_through;
+    if (sight == Sight::kThrough) ++e.seen_through;
   }
   return e;
+}
+
+void FreeSpaceMap::judge(const std::vector<Eigen::Vector3f>& world_points, int frames_ago,
+                         std::vector<Sight>& sights) const {
+  sights.assign(world_points.size(), Sight::kUnknown);
+  if (frames_ago < 0 || frames_ago >= static_cast<int>(scans_.size())) return;
+  const Scan& s = scans_[static_cast<std::size_t>(frames_ago)];
+  if (s.range.empty()) return;  // a blind frame saw nothing
+  for (std::size_t i = 0; i < world_points.size(); ++i) sights[i] = judgePoint(s, world_points[i]);
 }
 
 }  // namespace pcl_movers

@@ -129,6 +129,38 @@ TEST(FreeSpaceMap, MoverInPreviouslySeenFreeSpaceIsSeenThrough) {
   EXPECT_GT(ahead.fraction(), 0.3);
 }
 
+// Per point, judge() tells a walker's space, seen empty 1.5 s earlier, from the wall 0.3 m behind
+// it, seen where it is, and from the wall's patch the walker hid back then.
+TEST(FreeSpaceMap, JudgeTellsAWalkerFromTheWallBesideIt) {
+  using Sight = pcl_movers::FreeSpaceMap::Sight;
+  const Box wall{{15, 5}, 30, 0.3, 2.5};  // its face at y = 4.85
+  pcl_movers::FreeSpaceMap map;
+  map.setHistory(16);
+  std::vector<Scan> scans;
+  for (int f = 0; f <= 15; ++f) {  // a 0.6 m wide walker 0.3 m off the face, 1 m/s along it
+    const std::vector<Box> scene{wall, {{12 + 0.1 * f, 4.25}, 0.6, 0.6, 1.75}};
+    scans.push_back(castScan(Eigen::Vector2d(0, 0), scene));
+    map.addScan(*scans.back().sensor_points, scans.back().pose);
+  }
+  std::vector<Sight> walker, wall_now;
+  map.judge(worldPointsOf(scans.back(), 1), 15, walker);
+  map.judge(worldPointsOf(scans.back(), 0), 15, wall_now);
+  const auto count = [](const std::vector<Sight>& s, Sight v) {
+    return std::count(s.begin(), s.end(), v);
+  };
+  ASSERT_GT(walker.size(), 50u);
+  // Near its feet the window's lower rays end on the ground in front of or at the walker.
+  EXPECT_GT(count(walker, Sight::kThrough), 0.5 * walker.size());
+  EXPECT_LT(count(walker, Sight::kAt), 0.05 * walker.size());
+  EXPECT_GT(count(wall_now, Sight::kAt), 0.9 * wall_now.size());
+  EXPECT_GT(count(wall_now, Sight::kBefore), 10);  // where the walker stood 15 frames ago
+  EXPECT_EQ(count(wall_now, Sight::kThrough), 0);
+  // test() counts the same judgements.
+  const auto e = map.test(worldPointsOf(scans.back(), 1), 15);
+  EXPECT_EQ(e.seen_through, count(walker, Sight::kThrough));
+  EXPECT_EQ(e.tested, static_cast<int>(walker.size()) - count(walker, Sight::kUnknown));
+}
+
 // A blind frame (no return at all) takes a place in the history, so that `frames_ago` keeps
 // counting frames, and says nothing: it never sees anything through.
 TEST(FreeSpaceMap, BlindScanKeepsTheLagsAndGivesNoEvidence) {

@@ -494,6 +494,59 @@ movers:
   }
 }
 
+// A person walks at 1 m/s 0.3 m in front of a wall 20 m ahead, another stands by it further on.
+// Region growing joins both to the wall (their 0.6-0.9 m in depth are within its 0.05 · range
+// rule at 20 m). The motion
+// evidence splits the walker off as its own cluster (its space was seen empty 1.5 s earlier, the
+// wall was seen where it is) and it becomes a mover; the standing person was seen where it
+// stands, stays with the wall, and is never a mover.
+TEST(MoverDetector, WalkerBesideAWallIsItsOwnClusterAndAMover) {
+  const std::string yaml = R"(name: walker_by_wall
+seed: 5
+frames: 60
+rate_hz: 10
+sensor: {preset: hdl64, height: 1.8, max_range: 80, range_noise: 0.0, dropout: 0.0}
+terrain: {type: plane, height: 0, surface: terrain}
+ego: {start: [0, 0], heading: 0, speed: 0}
+movers:
+  - {type: person, start: [19.25, -6], heading: 90, speed: 1.0}
+statics:
+  - {type: wall, position: [20, 0], yaw: 90, size: [30, 0.3, 2.5]}
+  - {type: person, position: [19.25, 5], yaw: 180}
+)";
+  pcl_movers::sim::LidarSimulator simulator(pcl_movers::sim::parseScenario(yaml, "walker_by_wall"));
+  const SampleFrames f = simulateFrames(simulator, 60);
+  const auto walkerAt = [](int frame) { return Eigen::Vector2d(19.25, -6 + 0.1 * frame); };
+  for (const bool split : {false, true}) {
+    pcl_movers::DetectorParameters params;
+    params.free_space.split = split;
+    Detector detector;
+    detector.setParameters(params);
+    int own_frames = 0, mover_frames = 0, other_movers = 0;  // frames with a row on the walker
+    for (std::size_t i = 0; i < f.scans.size(); ++i) {
+      Detector::FrameResult result;
+      detector.process(f.scans[i], f.poses[i], f.times[i], static_cast<int>(i), result);
+      bool own = false, mover = false;
+      for (const auto& r : result.rows) {
+        const bool on_walker = (Eigen::Vector2d(r.x, r.y) - walkerAt(int(i))).norm() < 0.5;
+        own = own || on_walker;
+        mover = mover || (on_walker && r.mover);
+        other_movers += !on_walker && r.mover;
+      }
+      own_frames += own && i >= 20;
+      mover_frames += mover;
+    }
+    if (!split) {
+      // The scene shows the problem: without the evidence the walker is part of the wall.
+      EXPECT_LT(own_frames, 10) << "of 40 frames: the walker is no longer joined to the wall";
+      continue;
+    }
+    EXPECT_GE(own_frames, 30) << "of 40 frames";
+    EXPECT_GE(mover_frames, 20) << "of 60 frames";
+    EXPECT_EQ(other_movers, 0) << "a mover row off the walker (the wall, the standing person)";
+  }
+}
+
 // Real KITTI frames: the moving van and cyclist become movers within a few frames, the parked van
 // (track 3) never does.
 TEST(MoverDetector, KittiVanAndCyclist) {

@@ -58,7 +58,10 @@ class FreeSpaceMap {
    * in it), counts as seen empty up to this range [m]; 0, the default:
    * such a direction is unknown and not tested. See DetectorParameters::free_space_no_return for
    * why only downward directions. */
-  void setNoReturnRange(double range) { no_return_range_ = range > 0 ? range : 0; }
+  void setNoReturnRange(double range) {
+    no_return_range_ = range > 0 ? range : 0;
+    indexGroundRows();
+  }
   double getNoReturnRange() const { return no_return_range_; }
   /** \brief Height of the sensor above the ground [m] for the no-return rule: only a ray that
    * would meet the ground beyond the no-return range counts, and a point whose window holds a
@@ -66,7 +69,10 @@ class FreeSpaceMap {
    * from the ground, so its silence means a return dropped, absorbed or closer than the sensor's
    * minimum range (a parked van passed at 2 m: its side was inside a VLP-16's 2 m minimum range
    * and the silent rays made it "seen through"). 0, the default: every downward ray counts. */
-  void setSensorHeight(double height) { sensor_height_ = height > 0 ? height : 0; }
+  void setSensorHeight(double height) {
+    sensor_height_ = height > 0 ? height : 0;
+    indexGroundRows();
+  }
   double getSensorHeight() const { return sensor_height_; }
   /** \brief Half-size of the cell window compared around a direction (rows, columns). */
   void setWindow(int rows, int cols) {
@@ -97,6 +103,19 @@ class FreeSpaceMap {
    * Returns an empty Evidence when that scan is not stored. */
   Evidence test(const std::vector<Eigen::Vector3f>& world_points, int frames_ago) const;
 
+  /** \brief What a stored scan saw along the direction of a point. */
+  enum class Sight : std::uint8_t {
+    kUnknown,  ///< not tested: no return around there, a lost return, or no such scan
+    kThrough,  ///< its rays ended clearly beyond the point: the point's space was empty then
+    kAt,       ///< its nearest return was at the point's distance (within the margin): occupied
+    kBefore,   ///< its nearest return was clearly nearer: the point was hidden then
+  };
+  /** \brief Per point, what the scan stored `frames_ago` scans back saw along its direction
+   * (sights[i] for world_points[i]); test() counts kThrough among the points that are not
+   * kUnknown. */
+  void judge(const std::vector<Eigen::Vector3f>& world_points, int frames_ago,
+             std::vector<Sight>& sights) const;
+
   /** \brief Forgets all scans. */
   void clear() {
     scans_.clear();
@@ -122,6 +141,11 @@ class FreeSpaceMap {
   bool passesOverGround(float sin_elevation) const;
   /** \brief passesOverGround() for the rays of a row (true without a sensor height). */
   bool rowPassesOverGround(int row) const;
+  /** \brief Recomputes over_ground_rows_ (rowPassesOverGround() of every row: a sine per row,
+   * not per point and window row). */
+  void indexGroundRows();
+  /** \brief What scan `s` saw along the direction of world point `w`. */
+  Sight judgePoint(const Scan& s, const Eigen::Vector3f& w) const;
   /** \brief Recomputes beam_rows_ (rows with a return in any stored scan: the sensor's beams)
    * and, per row, the nearest beam row below and above it. */
   void indexBeamRows();
@@ -155,6 +179,9 @@ class FreeSpaceMap {
   /// row the nearest such row below / above it (-1 / rows_ when none).
   std::vector<std::uint8_t> beam_rows_;
   std::vector<int> beam_below_, beam_above_;
+  /// rowPassesOverGround() per row (indexGroundRows()); all rows without a sensor height.
+  std::vector<std::uint8_t> over_ground_rows_ =
+      std::vector<std::uint8_t>(static_cast<std::size_t>(rows_), 1);
 };
 
 // ----------------------------------------------------------------------------- implementation

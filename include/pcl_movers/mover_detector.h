@@ -6,6 +6,7 @@
 #include <pcl_movers/detector_parameters.h>
 #include <pcl_movers/free_space_map.h>
 #include <pcl_movers/io/tracks.h>
+#include <pcl_movers/motion_split.h>
 #include <pcl_movers/mover_tracker.h>
 #include <pcl_movers/range_image_region_growing.h>  // declarations only, for CellLabels
 #include <pcl_movers/sensor_model.h>
@@ -174,6 +175,14 @@ class MoverDetector {
   void groundFloors(const PointCloud& world, const std::vector<pcl::PointIndices>& clusters,
                     const std::vector<pcl::PointIndices>& world_clusters);
 
+  /** \brief Motion-aware segmentation (free_space.split; MotionSplitter): splits the clusters
+   * joining a part seen through by the scan free_space.long_lag frames ago to a surface it saw
+   * where it is, and recomputes `world` and `world_clusters` for the new clusters. Needs the
+   * current scan in the free-space map. */
+  void splitMovingParts(const PointCloud& organized, const Eigen::Isometry3d& pose,
+                        std::vector<pcl::PointIndices>& clusters, PointCloud& world,
+                        std::vector<pcl::PointIndices>& world_clusters);
+
   /** \brief Forgets all tracks and the origin (start of a new sequence). */
   void reset() {
     tracker_.reset();
@@ -226,6 +235,10 @@ class MoverDetector {
   std::vector<int> floors_;          ///< per cluster: lowest point of a nearer object below, or -1
   std::vector<double> floor_z_;      ///< what each cluster stands on, world z (NaN: none), tracker
   std::vector<float> ground_under_;  ///< groundFloors()' work buffer, kept between frames
+  MotionSplitter splitter_;          ///< splitMovingParts()' splitter and its buffers
+  std::vector<float> cell_ranges_;   ///< splitMovingParts(): distance of each cluster cell
+  std::vector<std::vector<FreeSpaceMap::Sight>> sights_;  ///< splitMovingParts(): per point
+  std::vector<Eigen::Vector3f> sight_points_;             ///< splitMovingParts(): work buffer
   StageObject<RangeImageOrganizer<PointT>> organizer_;
   StageObject<GroundPlaneFilter<PointT>> ground_;
   StageObject<RangeImageRegionGrowing<PointT>> segmenter_;

@@ -408,6 +408,12 @@ struct FreeSpaceParameters {
   /// false alarms per frame, parked cars passed at 2 m).
   bool no_return = true;
 
+  /// Motion-aware segmentation (MotionSplitter): a cluster holding both points that the scan
+  /// long_lag frames ago saw through and points it saw where they are is split into its moving
+  /// part(s) and its static rest, so that a walker beside a wall, hedge or parked car is tracked
+  /// on its own. false = clusters as region growing made them.
+  bool split = true;
+
   /** \brief Calls `f(key, member, description)` for every setting. */
   template <typename F>
   void forEachParameter(F&& f) {
@@ -422,6 +428,7 @@ struct FreeSpaceParameters {
     f("margin_per_metre", margin_per_metre, "margin per metre of distance");
     f("no_return", no_return,
       "1 = no return below the sensor in an earlier scan = seen empty up to max_range");
+    f("split", split, "1 = split a cluster's seen-through part from its static rest");
   }
 };
 

@@ -210,6 +210,62 @@ void MoverDetector<PointT>::groundFloors(const PointCloud& world,
 }
 
 template <typename PointT>
+void MoverDetector<PointT>::splitMovingParts(const PointCloud& organized,
+                                             const Eigen::Isometry3d& pose,
+                                             std::vector<pcl::PointIndices>& clusters,
+                                             PointCloud& world,
+                                             std::vector<pcl::PointIndices>& world_clusters) {
+  const auto& p = parameters_;
+  // The long lag (see MotionSplitter); in a sequence's first frames the oldest scan, once it is
+  // at least the short lag back.
+  const int lag =
+      std::min(std::max(p.free_space.long_lag, p.free_space.lag), free_space_.size() - 1);
+  if (lag < p.free_space.lag || lag < 1) return;
+  MotionSplitter::Parameters sp;
+  sp.min_points = p.segment.min_cluster_points;
+  sp.max_gap = p.segment.max_gap;
+  sp.depth_step = static_cast<float>(p.segment.depth_min);
+  sp.min_through_fraction = static_cast<float>(p.free_space.long_min_fraction);
+  splitter_.setParameters(sp);
+  cell_ranges_.resize(organized.size());
+  sights_.resize(clusters.size());
+  for (std::size_t c = 0; c < clusters.size(); ++c) {
+    sights_[c].clear();
+    const auto& idx = clusters[c].indices;
+    if (static_cast<int>(idx.size()) < 2 * sp.min_points) continue;  // no part and rest in it
+    // Every kStride-th point first: a cluster whose sample shows no part seen through and no
+    // surface seen where it is cannot be split, and most clusters are static throughout. This
+    // keeps the evidence at a quarter of its cost on a KITTI frame.
+    constexpr std::size_t kStride = 4;
+    const auto judgeEvery = [&](std::size_t stride) {
+      sight_points_.clear();
+      for (std::size_t k = 0; k < idx.size(); k += stride)
+        sight_points_.push_back(world[world_clusters[c].indices[k]].getVector3fMap());
+      free_space_.judge(sight_points_, lag, sights_[c]);
+    };
+    judgeEvery(kStride);
+    const auto sampled = [&](FreeSpaceMap::Sight v) {
+      return std::count(sights_[c].begin(), sights_[c].end(), v) * kStride;
+    };
+    if (sampled(FreeSpaceMap::Sight::kThrough) < static_cast<std::size_t>(sp.min_points) ||
+        sampled(FreeSpaceMap::Sight::kAt) < static_cast<std::size_t>(sp.min_points)) {
+      sights_[c].clear();
+      continue;
+    }
+    judgeEvery(1);
+    for (const auto i : idx)
+      cell_ranges_[static_cast<std::size_t>(i)] =
+          organized[static_cast<std::size_t>(i)].getVector3fMap().norm();
+  }
+  std::vector<pcl::PointIndices> split;
+  if (splitter_.split(static_cast<int>(organized.width), static_cast<int>(organized.height),
+                      cell_ranges_, clusters, sights_, split) == 0)
+    return;
+  clusters.swap(split);
+  clustersToWorld(organized, clusters, pose, world, world_clusters);
+}
+
+template <typename PointT>
 void MoverDetector<PointT>::process(const PointCloudConstPtr& scan,
                                     const Eigen::Isometry3d& world_pose, double time, int frame,
                                     FrameResult& result) {
@@ -264,6 +320,10 @@ void MoverDetector<PointT>::process(const PointCloudConstPtr& scan,
     free_space_.setSensorHeight(p.ground.sensor_height);
     free_space_.addScan(*organized, pose);
     tracker_.setFreeSpaceMap(&free_space_);
+    if (p.free_space.split) {
+      splitMovingParts(*organized, pose, clusters, *world, world_clusters);
+      result.clusters = static_cast<int>(clusters.size());
+    }
   } else {
     tracker_.setFreeSpaceMap(nullptr);
   }
