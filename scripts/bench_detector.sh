@@ -25,7 +25,7 @@ print("the thread CPU time of a whole frame, which is what one core would need o
 print("(the stage columns are wall-clock). The fastest of three removes short interruptions, not the")
 print("slower periods of a shared host: on this VM whole runs varied by up to a third within minutes")
 print("(17.9-24.4 ms total CPU for the same code on 2026-12-01).\n")
-stages = ["organize", "ground", "segment", "transform", "track", "total"]
+stages = ["organize", "ground", "segment", "transform", "split", "track", "total"]
 print("| mode | " + " | ".join(stages) + " | total CPU | registrations |")
 print("|---|" + "---:|" * (len(stages) + 2))
 for b in data.get("benchmarks", []):

@@ -576,3 +576,26 @@ TEST(FreeSpaceMap, SlowWalkerBesideAWallBecomesAMoverAndAStandingOneDoesNot) {
     }
   }
 }
+
+TEST(FreeSpaceMap, SlowWalkerRecedingAlongTheRayBecomesAMover) {
+  // A person walking straight away from the parked ego at 0.8 m/s, 20 m ahead. Its points now
+  // only fill space its own earlier body hid, so the approach test never passes; its view of
+  // 1.5 s ago is seen through by the current scan (the receding test of sustained slow motion).
+  // The same person standing is never a mover.
+  for (const double speed : {0.8, 0.0}) {
+    auto scene = [speed](int f, Eigen::Vector2d& ego) {
+      ego = Eigen::Vector2d(0, 0);
+      return std::vector<Box>{{{20.0 + speed * 0.1 * f, 0.0}, 0.4, 0.5, 1.75}};
+    };
+    auto all = [](int, const Eigen::Vector3f&) { return true; };
+    const auto mover = runTracker(pcl_movers::DetectorParameters(), true, 50, scene, all);
+    SCOPED_TRACE("speed " + std::to_string(speed));
+    if (speed > 0) {
+      const int first = firstTrue(mover);
+      EXPECT_GE(first, 0);
+      EXPECT_LE(first, 30);
+    } else {
+      EXPECT_EQ(count(mover), 0);
+    }
+  }
+}

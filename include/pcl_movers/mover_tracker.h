@@ -208,6 +208,9 @@ class MoverTracker {
     /// World points of the last update's view (at most kLastViewPoints), for
     /// splitMergedClusters().
     std::vector<Eigen::Vector3f> last_view;
+    /// last_view of the last free_space.long_lag updates, oldest first: the receding test of
+    /// sustained slow motion (slowFreeSpaceEvidence()).
+    std::deque<std::vector<Eigen::Vector3f>> past_views;
   };
   static constexpr std::size_t kLastViewPoints = 64;
   /// Unoccluded registered positions the filters restart from (see velocity_fit_init).
