@@ -172,6 +172,12 @@ FreeSpaceMap::Evidence FreeSpaceMap::test(const std::vector<Eigen::Vector3f>& wo
   return e;
 }
 
+FreeSpaceMap::Sight FreeSpaceMap::judge(const Eigen::Vector3f& world_point, int frames_ago) const {
+  if (frames_ago < 0 || frames_ago >= static_cast<int>(scans_.size())) return Sight::kUnknown;
+  const Scan& s = scans_[static_cast<std::size_t>(frames_ago)];
+  return s.range.empty() ? Sight::kUnknown : judgePoint(s, world_point);
+}
+
 void FreeSpaceMap::judge(const std::vector<Eigen::Vector3f>& world_points, int frames_ago,
                          std::vector<Sight>& sights) const {
   sights.assign(world_points.size(), Sight::kUnknown);

@@ -12,40 +12,63 @@ namespace pcl_movers {
 using Sight = FreeSpaceMap::Sight;
 
 int MotionSplitter::split(int width, int height, const std::vector<float>& ranges,
-                          const std::vector<pcl::PointIndices>& clusters,
-                          const std::vector<std::vector<Sight>>& sights,
-                          std::vector<pcl::PointIndices>& out) {
+                          std::vector<pcl::PointIndices>& clusters, const Judge& judge) {
   const int min_points = std::max(1, parameters_.min_points);
-  out.clear();
-  out.reserve(clusters.size());
+  const int stride = std::max(1, parameters_.sample_stride);
   std::vector<pcl::PointIndices> parts;
+  std::vector<std::size_t> emptied;  // clusters whose every point went into parts
   if (member_.size() != static_cast<std::size_t>(width) * height)
     member_.assign(static_cast<std::size_t>(width) * height, -1);
   for (std::size_t c = 0; c < clusters.size(); ++c) {
-    const auto& idx = clusters[c].indices;
-    const auto& sight = sights[c];
-    const auto through = std::count(sight.begin(), sight.end(), Sight::kThrough);
-    const auto at = std::count(sight.begin(), sight.end(), Sight::kAt);
-    // Only a cluster that holds both a moving part and a static surface is split: one seen
-    // through everywhere it was seen is a mover on its own (or two joined, which the tracker's
-    // split of merged clusters handles), one seen where it is everywhere is static.
-    if (through < min_points || at < min_points) {
-      out.push_back(clusters[c]);
-      continue;
+    auto& idx = clusters[c].indices;
+    const int n = static_cast<int>(idx.size());
+    if (n < 2 * min_points) continue;  // no part and static rest of min_points each in it
+    // One point in stride first. Only a cluster that holds both a moving part and a static
+    // surface is split: one seen through everywhere it was seen is a mover on its own (or two
+    // joined, which the tracker's split of merged clusters handles), one seen where it is
+    // everywhere is static, and so are most clusters.
+    sight_.assign(static_cast<std::size_t>(n), Sight::kUnknown);
+    judged_.assign(static_cast<std::size_t>(n), 0);
+    int through = 0, at = 0;
+    for (int k = 0; k < n; ++k) {
+      if (!sampled(width, idx[k])) continue;
+      sight_[k] = judge(c, static_cast<std::size_t>(k));
+      judged_[k] = 1;
+      through += sight_[k] == Sight::kThrough;
+      at += sight_[k] == Sight::kAt;
     }
+    if (through * stride < min_points || at * stride < min_points) continue;
+    // Then every point: the parts grow from every seen-through point, and the cluster must hold
+    // min_points of each kind.
+    through = at = 0;
+    for (int k = 0; k < n; ++k) {
+      if (!judged_[k]) sight_[k] = judge(c, static_cast<std::size_t>(k));
+      through += sight_[k] == Sight::kThrough;
+      at += sight_[k] == Sight::kAt;
+    }
+    if (through < min_points || at < min_points) continue;
     const std::size_t first_part = parts.size();
-    growParts(width, height, ranges, clusters[c], sight, parts);
-    pcl::PointIndices rest;
-    rest.header = clusters[c].header;
-    for (std::size_t k = 0; k < idx.size(); ++k)
-      if (part_of_[k] == 0) rest.indices.push_back(idx[k]);
-    // The rest of a cluster all of whose points went into parts is not kept as a sliver.
-    if (static_cast<int>(rest.indices.size()) >= min_points || parts.size() == first_part)
-      out.push_back(std::move(rest));
+    growParts(width, height, ranges, clusters[c], sight_, through, parts);
+    if (parts.size() == first_part) continue;
+    // The static rest keeps the cluster's place; a rest under min_points is no object.
+    std::size_t kept = 0;
+    for (int k = 0; k < n; ++k)
+      if (part_of_[k] == 0) idx[kept++] = idx[k];
+    idx.resize(static_cast<int>(kept) >= min_points ? kept : 0);
+    if (idx.empty()) emptied.push_back(c);
   }
   const int found = static_cast<int>(parts.size());
-  for (auto& part : parts) out.push_back(std::move(part));
+  for (auto it = emptied.rbegin(); it != emptied.rend(); ++it)
+    clusters.erase(clusters.begin() + static_cast<std::ptrdiff_t>(*it));
+  for (auto& part : parts) clusters.push_back(std::move(part));
   return found;
+}
+
+bool MotionSplitter::sampled(int width, int cell) const {
+  // Diagonals, not every stride-th index: a cluster's points are in row-major order, and every
+  // stride-th of them leaves whole columns unsampled when the image width is a multiple of it.
+  const int stride = std::max(1, parameters_.sample_stride);
+  return (cell / width + cell % width) % stride == 0;
 }
 
 void MotionSplitter::forEachNeighbour(int width, int height, int cell,
@@ -68,7 +91,7 @@ void MotionSplitter::forEachNeighbour(int width, int height, int cell,
 
 void MotionSplitter::growParts(int width, int height, const std::vector<float>& ranges,
                                const pcl::PointIndices& cluster, const std::vector<Sight>& sight,
-                               std::vector<pcl::PointIndices>& parts) {
+                               int through_all, std::vector<pcl::PointIndices>& parts) {
   const auto& idx = cluster.indices;
   const int n = static_cast<int>(idx.size());
   const int min_points = std::max(1, parameters_.min_points);
@@ -86,11 +109,9 @@ void MotionSplitter::growParts(int width, int height, const std::vector<float>& 
   // once in an output part.
   constexpr int kGrowing = 1, kPart = 2, kGrouped = 3, kRejected = -1;
   const std::size_t first_part = parts.size();
-  int through_in_parts = 0, through_all = 0;
+  int through_in_parts = 0;
   for (int seed = 0; seed < n; ++seed) {
-    const bool seen_through = sight[static_cast<std::size_t>(seed)] == Sight::kThrough;
-    through_all += seen_through;
-    if (!seen_through || part_of_[seed] != 0) continue;
+    if (part_of_[seed] != 0 || sight[static_cast<std::size_t>(seed)] != Sight::kThrough) continue;
     queue_.assign(1, seed);
     part_of_[seed] = kGrowing;
     int through = 0;
@@ -127,8 +148,8 @@ void MotionSplitter::growParts(int width, int height, const std::vector<float>& 
     std::sort(parts.back().indices.begin(), parts.back().indices.end());
   }
   // The parts must hold most of the cluster's seen-through points: a mover's evidence is
-  // concentrated in it, while porous foliage is seen through here and there all over, and a
-  // few of its patches happen to be smooth.
+  // concentrated in it, while porous foliage is seen through here and there all over, and a few of
+  // its patches happen to be smooth.
   const bool concentrated =
       through_in_parts >= parameters_.min_through_fraction * static_cast<float>(through_all);
   if (!concentrated) parts.resize(first_part);

@@ -9,6 +9,12 @@
 namespace {
 
 using Sight = pcl_movers::FreeSpaceMap::Sight;
+using Sights = std::vector<std::vector<Sight>>;
+
+/** A judge that answers from `sights` (per cluster, per point). */
+pcl_movers::MotionSplitter::Judge judgeFrom(const Sights& sights) {
+  return [&sights](std::size_t c, std::size_t k) { return sights[c][k]; };
+}
 
 /** A 12 × 60 range image holding one cluster: a wall at 10 m (seen where it is) with, in front of
  * it, a walker-sized block of cells 0.5 m nearer (rows 2-9, columns 20-25) seen as `walker`. */
@@ -42,10 +48,10 @@ TEST(MotionSplitter, SplitsTheSeenThroughPartOffTheStaticRest) {
   for (int c = 26; c <= 29; ++c)
     for (int r = 2; r <= 9; ++r) scene.sights[0][r * WallAndWalker::kWidth + c] = Sight::kBefore;
   pcl_movers::MotionSplitter splitter;
-  std::vector<pcl::PointIndices> out;
   ASSERT_EQ(splitter.split(WallAndWalker::kWidth, WallAndWalker::kHeight, scene.ranges,
-                           scene.clusters, scene.sights, out),
+                           scene.clusters, judgeFrom(scene.sights)),
             1);
+  const auto& out = scene.clusters;
   ASSERT_EQ(out.size(), 2u);  // the wall in the cluster's place, the walker appended
   EXPECT_EQ(out[0].indices.size(), WallAndWalker::kWidth * WallAndWalker::kHeight - 48u);
   ASSERT_EQ(out[1].indices.size(), 48u);
@@ -60,36 +66,35 @@ TEST(MotionSplitter, GrowsOverHiddenPointsOfThePartsSurfaceOnly) {
   for (int r = 6; r <= 9; ++r)
     for (int c = 20; c <= 25; ++c) scene.sights[0][r * WallAndWalker::kWidth + c] = Sight::kBefore;
   pcl_movers::MotionSplitter splitter;
-  std::vector<pcl::PointIndices> out;
   ASSERT_EQ(splitter.split(WallAndWalker::kWidth, WallAndWalker::kHeight, scene.ranges,
-                           scene.clusters, scene.sights, out),
+                           scene.clusters, judgeFrom(scene.sights)),
             1);
-  EXPECT_EQ(out.back().indices.size(), 48u);
+  EXPECT_EQ(scene.clusters.back().indices.size(), 48u);
 }
 
 TEST(MotionSplitter, LeavesClustersWithoutBothAMovingAndAStaticPart) {
   pcl_movers::MotionSplitter splitter;
-  std::vector<pcl::PointIndices> out;
   // A walker standing by the wall: seen where it is.
   WallAndWalker standing(Sight::kAt);
   EXPECT_EQ(splitter.split(WallAndWalker::kWidth, WallAndWalker::kHeight, standing.ranges,
-                           standing.clusters, standing.sights, out),
+                           standing.clusters, judgeFrom(standing.sights)),
             0);
-  ASSERT_EQ(out.size(), 1u);
-  EXPECT_EQ(out[0].indices, standing.clusters[0].indices);
+  ASSERT_EQ(standing.clusters.size(), 1u);
+  EXPECT_EQ(standing.clusters[0].indices.size(),
+            size_t{WallAndWalker::kWidth * WallAndWalker::kHeight});
   // A cluster seen through everywhere it was tested (a mover alone, or two joined) is whole.
   WallAndWalker moving(Sight::kThrough);
   for (auto& s : moving.sights[0])
     if (s == Sight::kAt) s = Sight::kUnknown;
   EXPECT_EQ(splitter.split(WallAndWalker::kWidth, WallAndWalker::kHeight, moving.ranges,
-                           moving.clusters, moving.sights, out),
+                           moving.clusters, judgeFrom(moving.sights)),
             0);
-  ASSERT_EQ(out.size(), 1u);
+  ASSERT_EQ(moving.clusters.size(), 1u);
   // A few seen-through points on a wall (a gap in foliage, a pose error) are no part.
   WallAndWalker speckled(Sight::kAt);
   for (int k = 0; k < 20; ++k)
     speckled.sights[0][k * 31 % speckled.sights[0].size()] = Sight::kThrough;
   EXPECT_EQ(splitter.split(WallAndWalker::kWidth, WallAndWalker::kHeight, speckled.ranges,
-                           speckled.clusters, speckled.sights, out),
+                           speckled.clusters, judgeFrom(speckled.sights)),
             0);
 }

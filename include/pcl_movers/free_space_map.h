@@ -115,6 +115,8 @@ class FreeSpaceMap {
    * kUnknown. */
   void judge(const std::vector<Eigen::Vector3f>& world_points, int frames_ago,
              std::vector<Sight>& sights) const;
+  /** \brief judge() of one point (kUnknown when that scan is not stored). */
+  Sight judge(const Eigen::Vector3f& world_point, int frames_ago) const;
 
   /** \brief Forgets all scans. */
   void clear() {

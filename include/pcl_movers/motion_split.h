@@ -23,6 +23,8 @@ namespace pcl_movers {
  * that grow over neighbouring points that were not seen where they are (seen-through ones, and
  * hidden or unknown ones that continue the part's surface within a depth step), and a part with
  * enough seen-through points becomes a cluster of its own; what remains is the static surface.
+ * A sample of each cluster is judged first (Parameters::sample_stride): most are static, and
+ * judging every point of every cluster would cost more than the rest of the evidence.
  *
  * The earlier scan is one long lag back (free_space.long_lag, 1.5 s): by then even a 0.5 m/s
  * walker has moved further than its own width, so its trailing side is not taken for a static
@@ -40,32 +42,43 @@ class MotionSplitter {
     /// Depth step [m] a part grows over to a point not seen through (segment.depth_min):
     /// a walker's surface is continuous within centimetres, the wall behind it is a step away.
     float depth_step = 0.1f;
-    /// Fraction of a part's tested points that must be seen through
-    /// (free_space.long_min_fraction).
+    /// Fraction of a part's points that must be seen through, and of the cluster's seen-through
+    /// points that its parts must hold (free_space.long_min_fraction).
     float min_through_fraction = 0.5f;
+    /// One point in sample_stride of a cluster (on image diagonals) is judged first, and the
+    /// rest only when they show min_points / sample_stride points of each kind: most clusters
+    /// are static throughout, and a walker of 8 points still holds two samples.
+    int sample_stride = 4;
   };
+
+  /** \brief What the earlier scan saw along point k of cluster c (called once per point at
+   * most, and only for the points the split needs: a sample, then every point of the clusters
+   * the sample shows mixed). */
+  using Judge = std::function<FreeSpaceMap::Sight(std::size_t cluster, std::size_t k)>;
 
   void setParameters(const Parameters& parameters) { parameters_ = parameters; }
   const Parameters& getParameters() const { return parameters_; }
 
-  /** \brief Splits `clusters` (indices into a `width` × `height` range image).
-   * \param[in] ranges distance from the sensor of every cell (only cluster cells are read)
-   * \param[in] sights per cluster, per point (in the cluster's order): what the earlier scan saw
-   * \param[out] out the clusters after the split: each input cluster's static rest in its place
-   * (dropped when under min_points), the parts appended after all of them
-   * \return the number of parts split off */
+  /** \brief Splits `clusters` (indices into a `width` × `height` range image) in place: a
+   * split cluster keeps its static rest in its place (removed when under min_points), the parts
+   * are appended after all clusters.
+   * \param[in] ranges distance from the sensor of every cell (only the cells of clusters of at
+   * least 2 · min_points points are read)
+   * \param[in] judge what the earlier scan saw along a cluster's point
+   * \return the number of parts split off (0: `clusters` unchanged) */
   int split(int width, int height, const std::vector<float>& ranges,
-            const std::vector<pcl::PointIndices>& clusters,
-            const std::vector<std::vector<FreeSpaceMap::Sight>>& sights,
-            std::vector<pcl::PointIndices>& out);
+            std::vector<pcl::PointIndices>& clusters, const Judge& judge);
 
  protected:
   /** \brief The parts of one cluster grown from its seen-through points; appends them to
-   * `parts` and marks their points in part_of_ (non-zero: in an accepted part). */
+   * `parts` when they hold half of the cluster's `through_all` seen-through points, and marks
+   * their points in part_of_ (non-zero). */
   void growParts(int width, int height, const std::vector<float>& ranges,
                  const pcl::PointIndices& cluster, const std::vector<FreeSpaceMap::Sight>& sight,
-                 std::vector<pcl::PointIndices>& parts);
+                 int through_all, std::vector<pcl::PointIndices>& parts);
 
+  /** \brief `cell` is one of the points judged first (and a seed of the parts). */
+  bool sampled(int width, int cell) const;
   /** \brief Calls `visit(position)` for the cluster's points next to `cell` in the image. */
   void forEachNeighbour(int width, int height, int cell,
                         const std::function<void(int)>& visit) const;
@@ -74,6 +87,8 @@ class MotionSplitter {
   std::vector<int> member_;   ///< per cell: position in the cluster being split, or -1
   std::vector<int> part_of_;  ///< per position of that cluster: non-zero when in a part
   std::vector<int> queue_;
+  std::vector<FreeSpaceMap::Sight> sight_;  ///< per point of the cluster being split, once judged
+  std::vector<std::uint8_t> judged_;        ///< per point of that cluster: sight_ is set
 };
 
 }  // namespace pcl_movers

@@ -177,8 +177,8 @@ class MoverDetector {
 
   /** \brief Motion-aware segmentation (free_space.split; MotionSplitter): splits the clusters
    * joining a part seen through by the scan free_space.long_lag frames ago to a surface it saw
-   * where it is, and recomputes `world` and `world_clusters` for the new clusters. Needs the
-   * current scan in the free-space map. */
+   * where it is, and remaps `world_clusters` to the new clusters (`world` keeps its points).
+   * Needs the current scan in the free-space map. */
   void splitMovingParts(const PointCloud& organized, const Eigen::Isometry3d& pose,
                         std::vector<pcl::PointIndices>& clusters, PointCloud& world,
                         std::vector<pcl::PointIndices>& world_clusters);
@@ -237,8 +237,7 @@ class MoverDetector {
   std::vector<float> ground_under_;  ///< groundFloors()' work buffer, kept between frames
   MotionSplitter splitter_;          ///< splitMovingParts()' splitter and its buffers
   std::vector<float> cell_ranges_;   ///< splitMovingParts(): distance of each cluster cell
-  std::vector<std::vector<FreeSpaceMap::Sight>> sights_;  ///< splitMovingParts(): per point
-  std::vector<Eigen::Vector3f> sight_points_;             ///< splitMovingParts(): work buffer
+  std::vector<int> world_of_cell_;   ///< splitMovingParts(): world index of each cluster cell
   StageObject<RangeImageOrganizer<PointT>> organizer_;
   StageObject<GroundPlaneFilter<PointT>> ground_;
   StageObject<RangeImageRegionGrowing<PointT>> segmenter_;

@@ -228,41 +228,31 @@ void MoverDetector<PointT>::splitMovingParts(const PointCloud& organized,
   sp.min_through_fraction = static_cast<float>(p.free_space.long_min_fraction);
   splitter_.setParameters(sp);
   cell_ranges_.resize(organized.size());
-  sights_.resize(clusters.size());
-  for (std::size_t c = 0; c < clusters.size(); ++c) {
-    sights_[c].clear();
-    const auto& idx = clusters[c].indices;
-    if (static_cast<int>(idx.size()) < 2 * sp.min_points) continue;  // no part and rest in it
-    // Every kStride-th point first: a cluster whose sample shows no part seen through and no
-    // surface seen where it is cannot be split, and most clusters are static throughout. This
-    // keeps the evidence at a quarter of its cost on a KITTI frame.
-    constexpr std::size_t kStride = 4;
-    const auto judgeEvery = [&](std::size_t stride) {
-      sight_points_.clear();
-      for (std::size_t k = 0; k < idx.size(); k += stride)
-        sight_points_.push_back(world[world_clusters[c].indices[k]].getVector3fMap());
-      free_space_.judge(sight_points_, lag, sights_[c]);
-    };
-    judgeEvery(kStride);
-    const auto sampled = [&](FreeSpaceMap::Sight v) {
-      return std::count(sights_[c].begin(), sights_[c].end(), v) * kStride;
-    };
-    if (sampled(FreeSpaceMap::Sight::kThrough) < static_cast<std::size_t>(sp.min_points) ||
-        sampled(FreeSpaceMap::Sight::kAt) < static_cast<std::size_t>(sp.min_points)) {
-      sights_[c].clear();
-      continue;
-    }
-    judgeEvery(1);
-    for (const auto i : idx)
+  world_of_cell_.resize(organized.size());
+  for (const auto& cluster : clusters) {
+    if (static_cast<int>(cluster.indices.size()) < 2 * sp.min_points) continue;  // never split
+    for (const auto i : cluster.indices)
       cell_ranges_[static_cast<std::size_t>(i)] =
           organized[static_cast<std::size_t>(i)].getVector3fMap().norm();
   }
-  std::vector<pcl::PointIndices> split;
+  const auto judge = [&](std::size_t c, std::size_t k) {
+    return free_space_.judge(world[world_clusters[c].indices[k]].getVector3fMap(), lag);
+  };
+  // The world points stay where they are: only which cluster each belongs to changes.
+  for (std::size_t c = 0; c < clusters.size(); ++c)
+    for (std::size_t k = 0; k < clusters[c].indices.size(); ++k)
+      world_of_cell_[static_cast<std::size_t>(clusters[c].indices[k])] =
+          world_clusters[c].indices[k];
   if (splitter_.split(static_cast<int>(organized.width), static_cast<int>(organized.height),
-                      cell_ranges_, clusters, sights_, split) == 0)
+                      cell_ranges_, clusters, judge) == 0)
     return;
-  clusters.swap(split);
-  clustersToWorld(organized, clusters, pose, world, world_clusters);
+  world_clusters.resize(clusters.size());
+  for (std::size_t c = 0; c < clusters.size(); ++c) {
+    world_clusters[c].indices.resize(clusters[c].indices.size());
+    for (std::size_t k = 0; k < clusters[c].indices.size(); ++k)
+      world_clusters[c].indices[k] =
+          world_of_cell_[static_cast<std::size_t>(clusters[c].indices[k])];
+  }
 }
 
 template <typename PointT>
