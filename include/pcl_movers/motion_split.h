@@ -20,9 +20,11 @@ namespace pcl_movers {
  * its own. What tells the two apart is not their shape but their history: the space the walker
  * occupies now was seen empty by an earlier scan (FreeSpaceMap::Sight::kThrough), while the wall
  * was seen where it is (kAt). A cluster holding both is cut: its seen-through points seed parts
- * that grow over neighbouring points that were not seen where they are (seen-through ones, and
- * hidden or unknown ones that continue the part's surface within a depth step), and a part with
- * enough seen-through points becomes a cluster of its own; what remains is the static surface.
+ * that grow over neighbouring points not seen where they are and continuing the part's surface
+ * within a depth step (a walker is smooth, porous foliage is not); touching parts are merged (a
+ * car's side and back); a part with enough seen-through points becomes a cluster of its own when
+ * the parts hold most of the cluster's seen-through points (foliage is seen through here and
+ * there all over); what remains is the static surface.
  * A sample of each cluster is judged first (Parameters::sample_stride): most are static, and
  * judging every point of every cluster would cost more than the rest of the evidence.
  *
