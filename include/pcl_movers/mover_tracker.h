@@ -519,11 +519,13 @@ class MoverTracker {
    * by the current scan (that view is then dropped, so every vote tests a different view). Sets
    * track.free_space; true when it reaches free_space_min_fraction. */
   bool freeSpaceEvidence(Track& track, const std::vector<Eigen::Vector3f>& points) const;
-  /** \brief Free-space evidence on the time scale of slow motion: the fraction of the track's
-   * current points seen through by the scan free_space_long_lag frames ago (the oldest stored
-   * early in a sequence) reaches free_space_long_min_fraction. A walker at 0.6 m/s has moved
-   * 0.3 m in free_space_lag frames, no more than the margin, so a pass at that lag says little;
-   * over 1.5 s it has moved 0.9 m. Sets track.free_space. */
+  /** \brief Free-space evidence on the time scale of slow motion: the larger of (a) the
+   * fraction of the track's current points seen through by the scan free_space_long_lag frames
+   * ago (the oldest stored early in a sequence) and (b) the fraction of its view of up to
+   * free_space_long_lag updates ago (Track::past_views) seen through by the current scan
+   * reaches free_space_long_min_fraction. A walker at 0.6 m/s has moved 0.3 m in
+   * free_space_lag frames, no more than the margin, so a pass at that lag says little; over
+   * 1.5 s it has moved 0.9 m. Sets track.free_space. */
   bool slowFreeSpaceEvidence(Track& track, const std::vector<Eigen::Vector3f>& points) const;
 
   void ensurePoints(const PointCloud& cloud, const pcl::PointIndices& indices,
