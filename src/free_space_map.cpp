@@ -157,14 +157,19 @@ FreeSpaceMap::Sight FreeSpaceMap::judgePoint(const Scan& s, const Eigen::Vector3
   return nearest >= d - margin ? Sight::kAt : Sight::kBefore;
 }
 
+const FreeSpaceMap::Scan* FreeSpaceMap::scanWithReturns(int frames_ago) const {
+  if (frames_ago < 0 || frames_ago >= static_cast<int>(scans_.size())) return nullptr;
+  const Scan& s = scans_[static_cast<std::size_t>(frames_ago)];
+  return s.range.empty() ? nullptr : &s;  // a blind frame saw nothing
+}
+
 FreeSpaceMap::Evidence FreeSpaceMap::test(const std::vector<Eigen::Vector3f>& world_points,
                                           int frames_ago) const {
   Evidence e;
-  if (frames_ago < 0 || frames_ago >= static_cast<int>(scans_.size())) return e;
-  const Scan& s = scans_[static_cast<std::size_t>(frames_ago)];
-  if (s.range.empty()) return e;  // a blind frame saw nothing
+  const Scan* s = scanWithReturns(frames_ago);
+  if (!s) return e;
   for (const auto& w : world_points) {
-    const Sight sight = judgePoint(s, w);
+    const Sight sight = judgePoint(*s, w);
     if (sight == Sight::kUnknown) continue;
     ++e.tested;
     if (sight == Sight::kThrough) ++e.seen_through;
@@ -173,18 +178,16 @@ FreeSpaceMap::Evidence FreeSpaceMap::test(const std::vector<Eigen::Vector3f>& wo
 }
 
 FreeSpaceMap::Sight FreeSpaceMap::judge(const Eigen::Vector3f& world_point, int frames_ago) const {
-  if (frames_ago < 0 || frames_ago >= static_cast<int>(scans_.size())) return Sight::kUnknown;
-  const Scan& s = scans_[static_cast<std::size_t>(frames_ago)];
-  return s.range.empty() ? Sight::kUnknown : judgePoint(s, world_point);
+  const Scan* s = scanWithReturns(frames_ago);
+  return s ? judgePoint(*s, world_point) : Sight::kUnknown;
 }
 
 void FreeSpaceMap::judge(const std::vector<Eigen::Vector3f>& world_points, int frames_ago,
                          std::vector<Sight>& sights) const {
   sights.assign(world_points.size(), Sight::kUnknown);
-  if (frames_ago < 0 || frames_ago >= static_cast<int>(scans_.size())) return;
-  const Scan& s = scans_[static_cast<std::size_t>(frames_ago)];
-  if (s.range.empty()) return;  // a blind frame saw nothing
-  for (std::size_t i = 0; i < world_points.size(); ++i) sights[i] = judgePoint(s, world_points[i]);
+  const Scan* s = scanWithReturns(frames_ago);
+  if (!s) return;
+  for (std::size_t i = 0; i < world_points.size(); ++i) sights[i] = judgePoint(*s, world_points[i]);
 }
 
 }  // namespace pcl_movers

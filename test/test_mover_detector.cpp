@@ -496,10 +496,9 @@ movers:
 
 // A person walks at 1 m/s 0.3 m in front of a wall 20 m ahead, another stands by it further on.
 // Region growing joins both to the wall (their 0.6-0.9 m in depth are within its 0.05 · range
-// rule at 20 m). The motion
-// evidence splits the walker off as its own cluster (its space was seen empty 1.5 s earlier, the
-// wall was seen where it is) and it becomes a mover; the standing person was seen where it
-// stands, stays with the wall, and is never a mover.
+// rule at 20 m). The motion evidence splits the walker off as its own cluster (its space was seen
+// empty 1.5 s earlier, the wall was seen where it is) and it becomes a mover; the standing person
+// was seen where it stands, stays with the wall, and is never a mover.
 TEST(MoverDetector, WalkerBesideAWallIsItsOwnClusterAndAMover) {
   const std::string yaml = R"(name: walker_by_wall
 seed: 5

@@ -146,6 +146,9 @@ class FreeSpaceMap {
   /** \brief Recomputes over_ground_rows_ (rowPassesOverGround() of every row: a sine per row,
    * not per point and window row). */
   void indexGroundRows();
+  /** \brief The scan stored `frames_ago` scans back, or nullptr when it is not stored or is a
+   * blind frame (nothing to judge against). */
+  const Scan* scanWithReturns(int frames_ago) const;
   /** \brief What scan `s` saw along the direction of world point `w`. */
   Sight judgePoint(const Scan& s, const Eigen::Vector3f& w) const;
   /** \brief Recomputes beam_rows_ (rows with a return in any stored scan: the sensor's beams)

@@ -383,48 +383,49 @@ class Raster {
    * segment's bounding box is tested against the two sample points nearest its projection
    * only (its distance to the samples is convex along the segment): the same cells as stamping
    * every disk, in time proportional to the area instead of the area times the samples (a 74 m
-   * wide road took minutes under the sanitizers). */
+   * wide road took 39 s under the sanitizers). */
   void stampPolyline(const std::vector<Eigen::Vector2d>& pts, double r) {
     for (std::size_t k = 0; k + 1 < pts.size(); ++k) {
       const Eigen::Vector2d a = pts[k], d = pts[k + 1] - pts[k];
       const double len = d.norm();
       const int n = std::max(1, int(std::ceil(len / (0.5 * cell_))));
-      const Eigen::Vector2d lo = a.cwiseMin(pts[k + 1]), hi = a.cwiseMax(pts[k + 1]);
-      const int i0 = std::max(0, int(std::floor((lo.x() - r - x0_) / cell_)));
-      const int i1 = std::min(nx_ - 1, int(std::floor((hi.x() + r - x0_) / cell_)));
-      const int j0 = std::max(0, int(std::floor((lo.y() - r - y0_) / cell_)));
-      const int j1 = std::min(ny_ - 1, int(std::floor((hi.y() + r - y0_) / cell_)));
-      for (int j = j0; j <= j1; ++j)
-        for (int i = i0; i <= i1; ++i) {
-          const double x = x0_ + (i + 0.5) * cell_, y = y0_ + (j + 0.5) * cell_;
-          const double t = len > 0 ? ((x - a.x()) * d.x() + (y - a.y()) * d.y()) / (len * len) : 0;
-          const double u = std::clamp(t, 0.0, 1.0) * n;
-          for (const int s : {int(std::floor(u)), int(std::ceil(u))}) {
-            const Eigen::Vector2d c = a + d * (double(std::clamp(s, 0, n)) / n);
-            if ((x - c.x()) * (x - c.x()) + (y - c.y()) * (y - c.y()) <= r * r) {
-              bits_[std::size_t(j) * nx_ + i] = 1;
-              break;
-            }
-          }
-        }
+      forBox(a.cwiseMin(pts[k + 1]), a.cwiseMax(pts[k + 1]), r,
+             [&](double x, double y, std::size_t cell) {
+               const double t =
+                   len > 0 ? ((x - a.x()) * d.x() + (y - a.y()) * d.y()) / (len * len) : 0;
+               const double u = std::clamp(t, 0.0, 1.0) * n;
+               for (const int s : {int(std::floor(u)), int(std::ceil(u))}) {
+                 const Eigen::Vector2d c = a + d * (double(std::clamp(s, 0, n)) / n);
+                 if ((x - c.x()) * (x - c.x()) + (y - c.y()) * (y - c.y()) <= r * r) {
+                   bits_[cell] = 1;
+                   break;
+                 }
+               }
+               return false;
+             });
     }
   }
 
  private:
+  /** Calls f(x, y, cell) for the cells whose index box covers [lo - r, hi + r] (x, y: the cell's
+   * centre) until it returns true; returns whether it did. */
+  template <typename F>
+  bool forBox(const Eigen::Vector2d& lo, const Eigen::Vector2d& hi, double r, F f) {
+    const int i0 = std::max(0, int(std::floor((lo.x() - r - x0_) / cell_)));
+    const int i1 = std::min(nx_ - 1, int(std::floor((hi.x() + r - x0_) / cell_)));
+    const int j0 = std::max(0, int(std::floor((lo.y() - r - y0_) / cell_)));
+    const int j1 = std::min(ny_ - 1, int(std::floor((hi.y() + r - y0_) / cell_)));
+    for (int j = j0; j <= j1; ++j)
+      for (int i = i0; i <= i1; ++i)
+        if (f(x0_ + (i + 0.5) * cell_, y0_ + (j + 0.5) * cell_, std::size_t(j) * nx_ + i))
+          return true;
+    return false;
+  }
   template <typename F>
   bool forDisk(const Eigen::Vector2d& c, double r, F f) {
-    const int i0 = std::max(0, int(std::floor((c.x() - r - x0_) / cell_)));
-    const int i1 = std::min(nx_ - 1, int(std::floor((c.x() + r - x0_) / cell_)));
-    const int j0 = std::max(0, int(std::floor((c.y() - r - y0_) / cell_)));
-    const int j1 = std::min(ny_ - 1, int(std::floor((c.y() + r - y0_) / cell_)));
-    for (int j = j0; j <= j1; ++j)
-      for (int i = i0; i <= i1; ++i) {
-        const double x = x0_ + (i + 0.5) * cell_, y = y0_ + (j + 0.5) * cell_;
-        if ((x - c.x()) * (x - c.x()) + (y - c.y()) * (y - c.y()) <= r * r &&
-            f(std::size_t(j) * nx_ + i))
-          return true;
-      }
-    return false;
+    return forBox(c, c, r, [&](double x, double y, std::size_t cell) {
+      return (x - c.x()) * (x - c.x()) + (y - c.y()) * (y - c.y()) <= r * r && f(cell);
+    });
   }
   double x0_ = 0, y0_ = 0, cell_ = 1;
   int nx_ = 0, ny_ = 0;
