@@ -65,7 +65,7 @@ double median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
-void runSequence(benchmark::State& state, const std::string& mode) {
+void runSequence(benchmark::State& state, const std::string& mode, bool split = true) {
   const auto& seq = kittiSequence();
   if (!seq.error.empty()) {
     state.SkipWithError(seq.error.c_str());
@@ -73,6 +73,7 @@ void runSequence(benchmark::State& state, const std::string& mode) {
   }
   pcl_movers::DetectorParameters params;
   params.track.mode = mode;
+  params.free_space.split = split;
   // Per frame, the fastest of kPasses runs of the whole sequence (the detector is deterministic:
   // every pass does the same work), as for the tracker benchmark: short interruptions by other
   // processes then do not count. (Slower periods of a shared host, which last longer than a
@@ -116,9 +117,14 @@ void BM_DetectorKitti_Registration(benchmark::State& state) {
 void BM_DetectorKitti_Centroid(benchmark::State& state) {
   runSequence(state, "centroid");
 }
+// The segmentation without the motion-aware split, side by side: what the split adds per frame.
+void BM_DetectorKitti_RegistrationNoSplit(benchmark::State& state) {
+  runSequence(state, "registration", false);
+}
 
 BENCHMARK(BM_DetectorKitti_Registration)->Unit(benchmark::kMillisecond)->Iterations(1);
 BENCHMARK(BM_DetectorKitti_Centroid)->Unit(benchmark::kMillisecond)->Iterations(1);
+BENCHMARK(BM_DetectorKitti_RegistrationNoSplit)->Unit(benchmark::kMillisecond)->Iterations(1);
 
 }  // namespace
 

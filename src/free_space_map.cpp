@@ -78,6 +78,7 @@ void FreeSpaceMap::indexGroundRows() {
   over_ground_rows_.resize(static_cast<std::size_t>(rows_));
   for (int r = 0; r < rows_; ++r)
     over_ground_rows_[static_cast<std::size_t>(r)] = rowPassesOverGround(r) ? 1 : 0;
+  versionWindowRows();
 }
 
 void FreeSpaceMap::indexBeamRows() {
@@ -98,6 +99,42 @@ void FreeSpaceMap::indexBeamRows() {
     beam_above_[static_cast<std::size_t>(r)] = last;
     if (beam_rows_[static_cast<std::size_t>(r)]) last = r;
   }
+  versionWindowRows();
+}
+
+void FreeSpaceMap::versionWindowRows(bool all) {
+  const auto rows = static_cast<std::size_t>(rows_);
+  if (beam_rows_.size() != rows || over_ground_rows_.size() != rows) {
+    // Mid-way through setResolution(): the next index call versions the rows; judgePoint()
+    // reads the scans directly until then.
+    window_rows_.clear();
+    row_version_.clear();
+    return;
+  }
+  if (window_rows_.size() != rows || row_version_.size() != rows) {
+    window_rows_.assign(rows, WindowRows());
+    row_version_.assign(rows, 0);
+    all = true;
+  }
+  for (int r = 0; r < rows_; ++r) {
+    WindowRows w;
+    windowRows(r, w.lo, w.hi);
+    // A window wider than the masks (a setWindow() of more than 25 rows) is never trusted.
+    const bool fits = w.hi - w.lo < 64;
+    for (int k = w.lo; k <= w.hi; ++k) {
+      const bool beam = beam_rows_[static_cast<std::size_t>(k)] != 0;
+      w.beam = w.beam || beam;
+      if (!fits) continue;
+      const auto bit = std::uint64_t{1} << (k - w.lo);
+      if (beam) w.beams |= bit;
+      if (!over_ground_rows_[static_cast<std::size_t>(k)]) w.steep |= bit;
+    }
+    auto& stored = window_rows_[static_cast<std::size_t>(r)];
+    if (all || !fits || !(w == stored) || row_version_[static_cast<std::size_t>(r)] == 0) {
+      stored = w;
+      row_version_[static_cast<std::size_t>(r)] = next_version_++;
+    }
+  }
 }
 
 void FreeSpaceMap::windowRows(int row, int& lo, int& hi) const {
@@ -113,19 +150,14 @@ void FreeSpaceMap::windowRows(int row, int& lo, int& hi) const {
   hi = std::min(hi, rows_ - 1);
 }
 
-FreeSpaceMap::Sight FreeSpaceMap::judgePoint(const Scan& s, const Eigen::Vector3f& w) const {
-  const Eigen::Vector3f q = s.world_to_sensor * w;
-  const float rxy = std::sqrt(q.x() * q.x() + q.y() * q.y());
-  const float d = std::sqrt(rxy * rxy + q.z() * q.z());
-  if (!(d > 0.5f)) return Sight::kUnknown;
-  const int row = cellRow(detail::fastAtan2Deg(q.z(), rxy));
-  const int col = cellCol(detail::fastAtan2Deg(q.y(), q.x()));
+void FreeSpaceMap::scanWindow(const Scan& s, int row, int col, float& nearest, bool& beam,
+                              bool& lost) const {
   // Nearest return over the window: a ray that passed just beside an edge never counts.
-  float nearest = 0.0f;
+  nearest = 0.0f;
+  beam = false;  // one of the window's rows is a beam of the sensor
+  lost = false;  // a beam cell there should have returned (the ground) but did not
   int lo = 0, hi = -1;
   windowRows(row, lo, hi);
-  bool beam = false;  // one of the window's rows is a beam of the sensor
-  bool lost = false;  // a beam cell there should have returned (the ground) but did not
   for (int r = lo; r <= hi; ++r) {
     if (!beam_rows_[static_cast<std::size_t>(r)]) continue;
     beam = true;
@@ -137,6 +169,74 @@ FreeSpaceMap::Sight FreeSpaceMap::judgePoint(const Scan& s, const Eigen::Vector3
       if (v > 0.0f && (nearest == 0.0f || v < nearest)) nearest = v;
       lost = lost || (v == 0.0f && steep);
     }
+  }
+}
+
+float FreeSpaceMap::windowCell(const Scan& s, int row, int col) const {
+  const auto r = static_cast<std::size_t>(row);
+  const std::size_t cell = r * static_cast<std::size_t>(cols_) + static_cast<std::size_t>(col);
+  const int blocks = (cols_ + kPoolCols - 1) / kPoolCols;
+  const std::size_t block = r * static_cast<std::size_t>(blocks) + col / kPoolCols;
+  if (s.pooled.size() != s.range.size() ||
+      s.pooled_version.size() != static_cast<std::size_t>(rows_) * blocks) {
+    s.pooled.resize(s.range.size());
+    s.pooled_version.assign(static_cast<std::size_t>(rows_) * blocks, 0);
+  }
+  if (s.pooled_version[block] != row_version_[r]) {
+    poolBlock(s, row, col - col % kPoolCols);
+    s.pooled_version[block] = row_version_[r];
+  }
+  return s.pooled[cell];
+}
+
+void FreeSpaceMap::poolBlock(const Scan& s, int row, int first_col) const {
+  constexpr float kNone = std::numeric_limits<float>::infinity();
+  const int end_col = std::min(first_col + kPoolCols, cols_);
+  float* out = s.pooled.data() + static_cast<std::size_t>(row) * cols_;
+  std::fill(out + first_col, out + end_col, kNone);
+  const int w = win_cols_;
+  const bool wraps = first_col - w < 0 || end_col + w > cols_;
+  const WindowRows& window = window_rows_[static_cast<std::size_t>(row)];
+  for (int k = window.lo; k <= window.hi; ++k) {
+    if (!beam_rows_[static_cast<std::size_t>(k)]) continue;
+    const float silent = over_ground_rows_[static_cast<std::size_t>(k)] ? kNone : -1.0f;
+    const float* in = s.range.data() + static_cast<std::size_t>(k) * cols_;
+    for (int dc = -w; dc <= w; ++dc) {
+      if (wraps) {
+        for (int c = first_col; c < end_col; ++c) {
+          int src = c + dc;
+          src = src >= cols_ ? src - cols_ : (src < 0 ? src + cols_ : src);
+          const float v = in[src];
+          out[c] = std::min(out[c], v > 0.0f ? v : silent);
+        }
+      } else {
+        for (int c = first_col; c < end_col; ++c) {
+          const float v = in[c + dc];
+          out[c] = std::min(out[c], v > 0.0f ? v : silent);
+        }
+      }
+    }
+  }
+}
+
+FreeSpaceMap::Sight FreeSpaceMap::judgePoint(const Scan& s, const Eigen::Vector3f& w,
+                                             WindowRead read) const {
+  const Eigen::Vector3f q = s.world_to_sensor * w;
+  const float rxy = std::sqrt(q.x() * q.x() + q.y() * q.y());
+  const float d = std::sqrt(rxy * rxy + q.z() * q.z());
+  if (!(d > 0.5f)) return Sight::kUnknown;
+  const int row = cellRow(detail::fastAtan2Deg(q.z(), rxy));
+  const int col = cellCol(detail::fastAtan2Deg(q.y(), q.x()));
+  float nearest = 0.0f;
+  bool beam = false, lost = false;
+  if (read == WindowRead::kPooled && row >= 0 && row < rows_ &&
+      static_cast<std::size_t>(rows_) == row_version_.size()) {
+    beam = window_rows_[static_cast<std::size_t>(row)].beam;
+    const float v = windowCell(s, row, col);
+    lost = v < 0.0f;
+    nearest = v < std::numeric_limits<float>::infinity() && !lost ? v : 0.0f;
+  } else {
+    scanWindow(s, row, col, nearest, beam, lost);
   }
   // A lost return may have been something closer than the sensor's minimum range, right in
   // front of the point: what the other rays saw says nothing then.

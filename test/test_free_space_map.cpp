@@ -431,6 +431,71 @@ TEST(FreeSpaceMap, FastMoverSeenFromTheFirstFrameIsConfirmedBeforeTheLagHasPasse
   }
 }
 
+/** Judges a point both ways judgePoint() can read a stored scan's window. */
+class FreeSpaceMapProbe : public pcl_movers::FreeSpaceMap {
+ public:
+  void judgeBothWays(const Eigen::Vector3f& w, int frames_ago, Sight& pooled, Sight& direct) const {
+    const Scan* s = scanWithReturns(frames_ago);
+    pooled = s ? judgePoint(*s, w) : Sight::kUnknown;
+    direct = s ? judgePoint(*s, w, WindowRead::kDirect) : Sight::kUnknown;
+  }
+};
+
+/** Random returns on the given beam elevations [deg], every `az_step` degrees, 15 % silent. */
+Cloud randomScan(std::mt19937& rng, const std::vector<double>& elevations, double az_step) {
+  std::uniform_real_distribution<double> range(1.0, 60.0), unit(0.0, 1.0);
+  Cloud cloud;
+  for (const double el : elevations)
+    for (double az = -180.0; az < 180.0; az += az_step) {
+      if (unit(rng) < 0.15) continue;
+      const double r = range(rng), e = el * M_PI / 180, a = az * M_PI / 180;
+      cloud.push_back(pcl::PointXYZ(float(r * std::cos(e) * std::cos(a)),
+                                    float(r * std::cos(e) * std::sin(a)), float(r * std::sin(e))));
+    }
+  return cloud;
+}
+
+TEST(FreeSpaceMap, PooledWindowsJudgeAsTheWindowsReadCellByCell) {
+  // The pooled cache must give what reading each window's cells gives, also after the beam rows
+  // change (scans of other beam layouts come and go), after the window changes, and at the
+  // azimuth seam (columns wrap around).
+  std::mt19937 rng(7);
+  FreeSpaceMapProbe map;
+  map.setHistory(4);
+  map.setSensorHeight(1.8);  // steep silent rays: lost returns
+  map.setNoReturnRange(40.0);
+  const std::vector<double> dense = {-20, -15.6, -11.2, -7.4, -5, -3.2, -1.8, -0.6, 0.4, 1.5};
+  const std::vector<double> sparse = {-15, -13, -11, -9, -7, -5, -3, -1, 1, 3, 5, 7, 9, 11, 13};
+  std::uniform_real_distribution<float> xy(-50.0f, 50.0f), z(-3.0f, 4.0f);
+  std::array<int, 4> sights{};
+  int compared = 0, mismatches = 0;
+  for (int frame = 0; frame < 8; ++frame) {
+    if (frame == 5) map.setWindow(1, 2);
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.translation() << 1.5 * frame, 0.3 * frame, 1.8;
+    pose.rotate(Eigen::AngleAxisd(0.05 * frame, Eigen::Vector3d::UnitZ()));
+    const Cloud scan = randomScan(rng, frame % 3 == 2 ? sparse : dense, 0.4);
+    map.addScan(scan, pose);
+    std::uniform_int_distribution<std::size_t> returned(0, scan.size() - 1);
+    for (int query = 0; query < 2000; ++query) {
+      Eigen::Vector3f w(xy(rng), xy(rng), z(rng));
+      if (query % 10 == 0) w.y() = 0.01f * w.y();  // behind the sensor: azimuth ±180°, the seam
+      if (query % 4 == 1)  // where the latest scan has a return: occupied then, at least
+        w = pose.cast<float>() * scan[returned(rng)].getVector3fMap();
+      for (int lag = 0; lag < map.size(); ++lag) {
+        pcl_movers::FreeSpaceMap::Sight pooled, direct;
+        map.judgeBothWays(w, lag, pooled, direct);
+        ++compared;
+        mismatches += pooled != direct;
+        ++sights[static_cast<std::size_t>(direct)];
+      }
+    }
+  }
+  EXPECT_EQ(mismatches, 0) << "of " << compared;
+  for (std::size_t k = 0; k < sights.size(); ++k)
+    EXPECT_GT(sights[k], compared / 100) << "sight " << k << " is rare: the test says little";
+}
+
 TEST(FreeSpaceMap, FastAtan2IsAccurateToAThousandthOfADegree) {
   double worst = 0;
   for (int i = 0; i < 3600; ++i) {
