@@ -19,6 +19,7 @@ int MotionSplitter::split(int width, int height, const std::vector<float>& range
   std::vector<std::size_t> emptied;  // clusters whose every point went into parts
   if (member_.size() != static_cast<std::size_t>(width) * height)
     member_.assign(static_cast<std::size_t>(width) * height, -1);
+  indexSampledCells(width, height);
   for (std::size_t c = 0; c < clusters.size(); ++c) {
     auto& idx = clusters[c].indices;
     const int n = static_cast<int>(idx.size());
@@ -31,7 +32,7 @@ int MotionSplitter::split(int width, int height, const std::vector<float>& range
     judged_.assign(static_cast<std::size_t>(n), 0);
     int through = 0, at = 0;
     for (int k = 0; k < n; ++k) {
-      if (!sampled(width, idx[k])) continue;
+      if (!sampled_cells_[static_cast<std::size_t>(idx[k])]) continue;
       sight_[k] = judge(c, static_cast<std::size_t>(k));
       judged_[k] = 1;
       through += sight_[k] == Sight::kThrough;
@@ -69,6 +70,18 @@ bool MotionSplitter::sampled(int width, int cell) const {
   // stride-th of them leaves whole columns unsampled when the image width is a multiple of it.
   const int stride = std::max(1, parameters_.sample_stride);
   return (cell / width + cell % width) % stride == 0;
+}
+
+void MotionSplitter::indexSampledCells(int width, int height) {
+  const int stride = std::max(1, parameters_.sample_stride);
+  const std::size_t cells = static_cast<std::size_t>(width) * height;
+  if (sampled_cells_.size() == cells && sampled_width_ == width && sampled_stride_ == stride)
+    return;
+  sampled_cells_.resize(cells);
+  for (std::size_t cell = 0; cell < cells; ++cell)
+    sampled_cells_[cell] = sampled(width, static_cast<int>(cell)) ? 1 : 0;
+  sampled_width_ = width;
+  sampled_stride_ = stride;
 }
 
 void MotionSplitter::forEachNeighbour(int width, int height, int cell,
