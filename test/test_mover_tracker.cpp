@@ -530,7 +530,7 @@ TEST(MoverTracker, CoastingStaticTrackSkipsClaimedClustersAndIsReacquired) {
 }
 
 TEST(MoverTracker, FitVelocityUsesScatterOfPositions) {
-  std::deque<Eigen::Vector3d> history;
+  std::vector<Eigen::Vector3d> history;
   history.emplace_back(0, 0, 0);
   history.emplace_back(0.14, 0, 0.1);
   const auto two = Tracker::fitVelocity(history, 0.1);
@@ -554,7 +554,7 @@ TEST(MoverTracker, FitVelocityUsesScatterOfPositions) {
   // A static object whose registered positions scatter by a few tenths of a metre (a far,
   // coarsely sampled object): the line through them is faster than mover_speed, but the
   // scatter about it makes it no evidence of motion.
-  std::deque<Eigen::Vector3d> noisy;
+  std::vector<Eigen::Vector3d> noisy;
   const double xs[6] = {0.2, -0.2, 0.1, -0.25, 0.15, -0.1};
   const double ys[6] = {-0.5, 0.4, -0.4, 0.6, -0.1, 0.6};
   for (int k = 0; k < 6; ++k) noisy.emplace_back(xs[k], ys[k], 0.1 * k);
@@ -682,7 +682,7 @@ TEST(MoverTracker, SpeedSignificanceRatioIsTheFQuantile) {
     const int trials = 20000;
     int rejected = 0;
     for (int i = 0; i < trials; ++i) {
-      std::deque<Eigen::Vector3d> history;
+      std::vector<Eigen::Vector3d> history;
       for (std::size_t k = 0; k < n; ++k) history.emplace_back(noise(rng), noise(rng), 0.1 * k);
       const auto fit = Tracker::fitVelocity(history, 1e-9);  // σ from the scatter alone
       rejected += fit.velocity.norm() >= ratio * fit.sigma_v;
@@ -843,7 +843,7 @@ TEST(MoverTracker, YoungTrackVelocityIsNotHeldByTheAccelerationLimit) {
 TEST(MoverTracker, FitAccelerationMatchesHandComputedQuadratic) {
   const double eps = 0.1;
   const double bump[4] = {-1, 3, -3, 1};
-  std::deque<Eigen::Vector3d> positions;
+  std::vector<Eigen::Vector3d> positions;
   for (int k = 0; k < 4; ++k) positions.emplace_back(k * k + eps * bump[k], 5.0, 10.0 + k);
   const auto fit = Tracker::fitAcceleration(positions, 0.01);
   ASSERT_TRUE(fit.valid);

@@ -15,11 +15,22 @@
 
 #include <Eigen/Geometry>
 #include <cstdint>
-#include <deque>
 #include <limits>
+#include <type_traits>
 #include <vector>
 
 namespace pcl_movers {
+/** \brief The last few values a track keeps (positions, votes, views), oldest first.
+ *
+ * A vector with pop_front(), not a std::deque: a deque allocates even when it is moved from, and
+ * its move may throw, so std::vector<Track> copied every track (all its views and points) each
+ * time it grew, and every birth and deletion allocated a dozen times (about 8 M instructions a
+ * KITTI frame). The windows hold at most a few dozen values: shifting them is cheap. */
+template <typename T>
+class Fifo : public std::vector<T> {
+ public:
+  void pop_front() { this->erase(this->begin()); }
+};
 
 /** \brief The test of the mover decision that settled a track's last update, in the order
  * MoverTracker tests them: why an object is, or is not, a mover (tracks.csv `reason`). */
@@ -161,7 +172,7 @@ class MoverTracker {
     bool seen_occluded = false;
     /// (x, y, time) of the first run of kUnoccludedFitPositions consecutive registered
     /// unoccluded positions (shorter while it is being collected).
-    std::deque<Eigen::Vector3d> unoccluded_positions;
+    Fifo<Eigen::Vector3d> unoccluded_positions;
     int age = 0;                             ///< frames since birth
     int missed = 0;                          ///< consecutive frames without update
     bool mover = false;                      ///< mover decision after the last update
@@ -181,13 +192,13 @@ class MoverTracker {
     /// Longest (not large) view of the object so far [m]: how far from the last visible part
     /// another part of it can reappear (see reacquire_velocity).
     double max_length = 0;
-    std::deque<char> fast;                ///< speed > mover_speed after each of the last updates
-    std::deque<Eigen::Vector3d> history;  ///< (x, y, time) of the last measurements
+    Fifo<char> fast;                ///< speed > mover_speed after each of the last updates
+    Fifo<Eigen::Vector3d> history;  ///< (x, y, time) of the last measurements
     /// (x, y, time) of the measurements of the last slow_window seconds (sustainedMotion()).
-    std::deque<Eigen::Vector3d> long_history;
+    Fifo<Eigen::Vector3d> long_history;
     /// (x, y, time) of the last registered measurements (manoeuvre_window of them), for the
     /// manoeuvre test of registeredSigma().
-    std::deque<Eigen::Vector3d> registered;
+    Fifo<Eigen::Vector3d> registered;
     /// Reported velocity (registration mode): a second constant-velocity filter on the registered
     /// positions whose σ follows the registrations (registeredSigma()), while `filter`, which
     /// gates, searches and decides, keeps the conservative range-scaled σ. Uninitialized until
@@ -202,16 +213,18 @@ class MoverTracker {
     bool confirmed = false;      ///< latched mover (see mover_latch)
     int mover_run = 0;           ///< consecutive updates decided mover (latched after mover_window)
     double free_space = 0;       ///< free-space evidence of the last test (fraction seen through)
-    std::deque<char> free_votes;  ///< free-space test passed, for each of the last tests
+    Fifo<char> free_votes;       ///< free-space test passed, for each of the last tests
     /// World points of the last updates (subsampled), oldest first, for the free-space test.
-    std::deque<std::vector<Eigen::Vector3f>> past_points;
+    Fifo<std::vector<Eigen::Vector3f>> past_points;
     /// World points of the last update's view (at most kLastViewPoints), for
     /// splitMergedClusters().
     std::vector<Eigen::Vector3f> last_view;
     /// last_view of the last free_space.long_lag updates, oldest first: the receding test of
     /// sustained slow motion (slowFreeSpaceEvidence()).
-    std::deque<std::vector<Eigen::Vector3f>> past_views;
+    Fifo<std::vector<Eigen::Vector3f>> past_views;
   };
+  static_assert(std::is_nothrow_move_constructible<Track>::value,
+                "std::vector<Track> must move its tracks when it grows, not copy them (see Fifo)");
   static constexpr std::size_t kLastViewPoints = 64;
   /// Unoccluded registered positions the filters restart from (see velocity_fit_init).
   static constexpr int kUnoccludedFitPositions = 3;
@@ -327,7 +340,7 @@ class MoverTracker {
   /** \brief Least-squares line through measured positions (x, y, time): its velocity, the
    * velocity's σ (per axis) from the scatter of the positions about the line (at least
    * `min_sigma`), and the means and spread a caller needs to restart a filter from the line. */
-  static LineFit fitVelocity(const std::deque<Eigen::Vector3d>& history, double min_sigma);
+  static LineFit fitVelocity(const std::vector<Eigen::Vector3d>& history, double min_sigma);
 
   /** \brief The |v| / σ_v a line fit of `positions` positions must reach for "velocity = 0" to be
    * rejected at `false_rate`: with σ estimated from the scatter (2 (n - 2) degrees of freedom,
@@ -349,7 +362,7 @@ class MoverTracker {
   /** \brief Least-squares quadratic `p + v·τ + a·τ²/2` through measured positions (x, y, time):
    * its acceleration and the acceleration's σ (per axis) from the scatter of the positions about
    * the quadratic (at least `min_sigma`). */
-  static QuadraticFit fitAcceleration(const std::deque<Eigen::Vector3d>& positions,
+  static QuadraticFit fitAcceleration(const std::vector<Eigen::Vector3d>& positions,
                                       double min_sigma);
 
   /** \brief Forgets all tracks. */

@@ -233,7 +233,7 @@ void MoverTracker<PointT>::buildView(const Candidate& candidate, const Eigen::Ma
 
 template <typename PointT>
 typename MoverTracker<PointT>::LineFit MoverTracker<PointT>::fitVelocity(
-    const std::deque<Eigen::Vector3d>& history, double min_sigma) {
+    const std::vector<Eigen::Vector3d>& history, double min_sigma) {
   LineFit fit;
   const std::size_t n = history.size();
   fit.positions = n;
@@ -341,7 +341,7 @@ bool MoverTracker<PointT>::sustainedMotion(const Track& track) const {
 
 template <typename PointT>
 typename MoverTracker<PointT>::QuadraticFit MoverTracker<PointT>::fitAcceleration(
-    const std::deque<Eigen::Vector3d>& positions, double min_sigma) {
+    const std::vector<Eigen::Vector3d>& positions, double min_sigma) {
   QuadraticFit fit;
   const std::size_t n = positions.size();
   if (n < 4) return fit;  // three positions fit any quadratic exactly: no scatter to judge by
@@ -512,7 +512,7 @@ double MoverTracker<PointT>::registeredSigma(const Track& track, const Eigen::Ve
         !(quadratic.acceleration.norm() > p.track.manoeuvre_sigmas * quadratic.sigma_a))
       return prior;
   }
-  std::deque<Eigen::Vector3d> positions = track.history;  // at most mover_window + 1
+  Fifo<Eigen::Vector3d> positions = track.history;  // at most mover_window + 1
   positions.emplace_back(measurement.x(), measurement.y(), time);
   while (static_cast<int>(positions.size()) > p.decision.window + 1) positions.pop_front();
   // Four positions leave 4 degrees of freedom for the scatter; with fewer it is a guess.
