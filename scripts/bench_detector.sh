@@ -40,7 +40,9 @@ for b in data.get("benchmarks", []):
     cells = [f"{b.get(s + '_ms', float('nan')):.1f}" for s in stages]
     print(f"| {mode} | " + " | ".join(cells) +
           f" | {b.get('total_cpu_ms', float('nan')):.1f} | {b.get('registrations', 0):.0f} |")
-if split and not split.get("error_occurred"):
+if split and split.get("error_occurred"):
+    print(f"\nMotion-aware split cost: skipped: {split.get('error_message', '')}")
+elif split:
     on, off = split["with_split_ms"], split["without_split_ms"]
     con, coff = split["with_split_cpu_ms"], split["without_split_cpu_ms"]
     print(f"\n**Motion-aware split** (`free_space.split`, on by default), registration mode with and without it, "

@@ -175,13 +175,11 @@ void FreeSpaceMap::scanWindow(const Scan& s, int row, int col, float& nearest, b
 float FreeSpaceMap::windowCell(const Scan& s, int row, int col) const {
   const auto r = static_cast<std::size_t>(row);
   const std::size_t cell = r * static_cast<std::size_t>(cols_) + static_cast<std::size_t>(col);
-  const int blocks = (cols_ + kPoolCols - 1) / kPoolCols;
-  const std::size_t block = r * static_cast<std::size_t>(blocks) + col / kPoolCols;
-  if (s.pooled.size() != s.range.size() ||
-      s.pooled_version.size() != static_cast<std::size_t>(rows_) * blocks) {
-    s.pooled.resize(s.range.size());
-    s.pooled_version.assign(static_cast<std::size_t>(rows_) * blocks, 0);
-  }
+  const std::size_t block =
+      r * static_cast<std::size_t>(poolBlocksPerRow()) + static_cast<std::size_t>(col / kPoolCols);
+  // Allocated on the first judgement against this scan's memory (addScan() reuses the oldest
+  // scan's, and sets every block unbuilt).
+  if (s.pooled.size() != s.range.size()) s.pooled.resize(s.range.size());
   if (s.pooled_version[block] != row_version_[r]) {
     poolBlock(s, row, col - col % kPoolCols);
     s.pooled_version[block] = row_version_[r];
@@ -195,6 +193,8 @@ void FreeSpaceMap::poolBlock(const Scan& s, int row, int first_col) const {
   float* out = s.pooled.data() + static_cast<std::size_t>(row) * cols_;
   std::fill(out + first_col, out + end_col, kNone);
   const int w = win_cols_;
+  // Blocks at the azimuth seam wrap their column index; the others use a loop without the
+  // wrap test, which vectorizes.
   const bool wraps = first_col - w < 0 || end_col + w > cols_;
   const WindowRows& window = window_rows_[static_cast<std::size_t>(row)];
   for (int k = window.lo; k <= window.hi; ++k) {

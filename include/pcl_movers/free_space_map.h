@@ -177,6 +177,7 @@ class FreeSpaceMap {
    * around a few objects only (the tracker's tests: ~30 points per row queried). */
   void poolBlock(const Scan& s, int row, int first_col) const;
   static constexpr int kPoolCols = 32;
+  int poolBlocksPerRow() const { return (cols_ + kPoolCols - 1) / kPoolCols; }
 
   /** \brief After the beam rows or the steep rows changed: gives a new version to each row whose
    * window reads other rows or other flags (every row when `all`), so that every scan rebuilds
@@ -263,7 +264,7 @@ void FreeSpaceMap::addScan(const pcl::PointCloud<PointT>& scan, const Eigen::Iso
   }
   s.world_to_sensor = pose.inverse().cast<float>();
   s.range.assign(static_cast<std::size_t>(rows_) * cols_, 0.0f);
-  std::fill(s.pooled_version.begin(), s.pooled_version.end(), 0);  // nothing pooled of it yet
+  s.pooled_version.assign(static_cast<std::size_t>(rows_) * poolBlocksPerRow(), 0);  // none yet
   s.sampled_rows.assign(static_cast<std::size_t>(rows_), 0);
   s.min_range = std::numeric_limits<float>::max();
   // In blocks: the coordinates copied out of the point structs, the cells computed by a loop
