@@ -190,12 +190,14 @@ float FreeSpaceMap::windowCell(const Scan& s, int row, int col) const {
 void FreeSpaceMap::poolBlock(const Scan& s, int row, int first_col) const {
   constexpr float kNone = std::numeric_limits<float>::infinity();
   const int end_col = std::min(first_col + kPoolCols, cols_);
-  float* out = s.pooled.data() + static_cast<std::size_t>(row) * cols_;
-  std::fill(out + first_col, out + end_col, kNone);
+  // Pooled in a local block, not in the image: the compiler keeps it in registers (the image
+  // might alias the scan's ranges, so every pass would load and store it).
+  alignas(64) float pool[kPoolCols];
+  std::fill(pool, pool + kPoolCols, kNone);
   const int w = win_cols_;
-  // Blocks at the azimuth seam wrap their column index; the others use a loop without the
-  // wrap test, which vectorizes.
-  const bool wraps = first_col - w < 0 || end_col + w > cols_;
+  // Blocks at the azimuth seam (and the last, short one) wrap their column index; the others
+  // use a loop of kPoolCols without the wrap test, which vectorizes.
+  const bool wraps = first_col - w < 0 || first_col + kPoolCols + w > cols_;
   const WindowRows& window = window_rows_[static_cast<std::size_t>(row)];
   for (int k = window.lo; k <= window.hi; ++k) {
     if (!beam_rows_[static_cast<std::size_t>(k)]) continue;
@@ -207,26 +209,145 @@ void FreeSpaceMap::poolBlock(const Scan& s, int row, int first_col) const {
           int src = c + dc;
           src = src >= cols_ ? src - cols_ : (src < 0 ? src + cols_ : src);
           const float v = in[src];
-          out[c] = std::min(out[c], v > 0.0f ? v : silent);
+          pool[c - first_col] = std::min(pool[c - first_col], v > 0.0f ? v : silent);
         }
       } else {
-        for (int c = first_col; c < end_col; ++c) {
-          const float v = in[c + dc];
-          out[c] = std::min(out[c], v > 0.0f ? v : silent);
+        const float* src = in + first_col + dc;
+        for (int c = 0; c < kPoolCols; ++c) {
+          const float v = src[c];
+          pool[c] = std::min(pool[c], v > 0.0f ? v : silent);
         }
       }
+    }
+  }
+  std::copy(pool, pool + (end_col - first_col),
+            s.pooled.data() + static_cast<std::size_t>(row) * cols_ + first_col);
+}
+
+void FreeSpaceMap::poolScan(Scan& s) {
+  const auto rows = static_cast<std::size_t>(rows_), cols = static_cast<std::size_t>(cols_);
+  if (row_version_.size() != rows || s.range.size() != rows * cols) return;  // built on use
+  constexpr float kNone = std::numeric_limits<float>::infinity();
+  const int w = win_cols_;
+  // Pass 1: per beam row, the min over each cell's window columns of its returns (a silent ray
+  // counting -1 in a steep row, +inf in another).
+  row_minima_.resize(rows * cols);
+  for (std::size_t k = 0; k < rows; ++k) {
+    if (!beam_rows_[k]) continue;
+    const float silent = over_ground_rows_[k] ? kNone : -1.0f;
+    const float* in = s.range.data() + k * cols;
+    float* out = row_minima_.data() + k * cols;
+    const auto mapped = [&](int c) {
+      c = c >= cols_ ? c - cols_ : (c < 0 ? c + cols_ : c);
+      const float v = in[c];
+      return v > 0.0f ? v : silent;
+    };
+    const int middle_begin = std::min(w, cols_), middle_end = std::max(middle_begin, cols_ - w);
+    // The columns next to the azimuth seam wrap; the middle ones use a loop that vectorizes.
+    for (int c = 0; c < cols_; c = c + 1 == middle_begin ? middle_end : c + 1) {
+      float m = kNone;
+      for (int dc = -w; dc <= w; ++dc) m = std::min(m, mapped(c + dc));
+      out[c] = m;
+    }
+    std::fill(out + middle_begin, out + middle_end, kNone);
+    for (int dc = -w; dc <= w; ++dc)
+      for (int c = middle_begin; c < middle_end; ++c) {
+        const float v = in[c + dc];
+        out[c] = std::min(out[c], v > 0.0f ? v : silent);
+      }
+  }
+  // Pass 2: per row, the min over its window's beam rows.
+  s.pooled.resize(rows * cols);
+  for (std::size_t r = 0; r < rows; ++r) {
+    float* out = s.pooled.data() + r * cols;
+    std::fill(out, out + cols, kNone);
+    const WindowRows& window = window_rows_[r];
+    for (int k = window.lo; k <= window.hi; ++k) {
+      if (!beam_rows_[static_cast<std::size_t>(k)]) continue;
+      const float* in = row_minima_.data() + static_cast<std::size_t>(k) * cols;
+      for (std::size_t c = 0; c < cols; ++c) out[c] = std::min(out[c], in[c]);
+    }
+  }
+  const auto per_row = static_cast<std::size_t>(poolBlocksPerRow());
+  for (std::size_t r = 0; r < rows; ++r)
+    std::fill_n(s.pooled_version.begin() + static_cast<std::ptrdiff_t>(r * per_row), per_row,
+                row_version_[r]);
+}
+
+void FreeSpaceMap::locate(const Scan& s, const Eigen::Vector3f* world_points, std::size_t n,
+                          float* zs, float* ds, int* rows, int* cols) const {
+  // Selects only, and every value a float, so that the second loop vectorizes (see
+  // computeCells()). The cells are computed as cellRow() and cellCol() compute them, with the
+  // division and an exact floor (truncation, less one where that rounded up), so that a point's
+  // cell does not depend on how it was judged.
+  const float min_el = min_el_deg_, el_res = el_res_deg_, az_res = az_res_deg_;
+  const float n_cols = static_cast<float>(cols_);
+  constexpr std::size_t kChunk = 64;
+  alignas(64) float xs[kChunk], ys[kChunk];
+  for (std::size_t first = 0; first < n; first += kChunk) {
+    const std::size_t m = std::min(kChunk, n - first);
+    float* z_out = zs + first;
+    for (std::size_t i = 0; i < m; ++i) {
+      const Eigen::Vector3f q = s.world_to_sensor * world_points[first + i];
+      xs[i] = q.x();
+      ys[i] = q.y();
+      z_out[i] = q.z();
+    }
+    for (std::size_t i = 0; i < m; ++i) {
+      const float x = xs[i], y = ys[i], z = z_out[i];
+      const float rxy = std::sqrt(x * x + y * y);
+      const float d = std::sqrt(rxy * rxy + z * z);
+      float el = (detail::fastAtan2Deg(z, rxy) - min_el) / el_res;
+      float az = (detail::fastAtan2Deg(y, x) + 180.0f) / az_res;
+      // Outside (0.5 m, FLT_MAX] (sightAt() does not judge those): row -2 and column 0, safe
+      // values for the conversions to int.
+      el = d > 0.5f ? el : -2.0f;
+      el = d <= std::numeric_limits<float>::max() ? el : -2.0f;
+      az = d > 0.5f ? az : 0.0f;
+      az = d <= std::numeric_limits<float>::max() ? az : 0.0f;
+      const float el_trunc = static_cast<float>(static_cast<int>(el));
+      const float az_trunc = static_cast<float>(static_cast<int>(az));
+      const float row = el_trunc > el ? el_trunc - 1.0f : el_trunc;
+      float col = az_trunc > az ? az_trunc - 1.0f : az_trunc;
+      col = col >= n_cols ? col - n_cols : (col < 0.0f ? col + n_cols : col);
+      ds[first + i] = d;
+      rows[first + i] = static_cast<int>(row);
+      cols[first + i] = static_cast<int>(col);
     }
   }
 }
 
 FreeSpaceMap::Sight FreeSpaceMap::judgePoint(const Scan& s, const Eigen::Vector3f& w,
                                              WindowRead read) const {
-  const Eigen::Vector3f q = s.world_to_sensor * w;
-  const float rxy = std::sqrt(q.x() * q.x() + q.y() * q.y());
-  const float d = std::sqrt(rxy * rxy + q.z() * q.z());
-  if (!(d > 0.5f)) return Sight::kUnknown;
-  const int row = cellRow(detail::fastAtan2Deg(q.z(), rxy));
-  const int col = cellCol(detail::fastAtan2Deg(q.y(), q.x()));
+  float z = 0.0f, d = 0.0f;
+  int row = 0, col = 0;
+  locate(s, &w, 1, &z, &d, &row, &col);
+  return sightAt(s, z, d, row, col, read);
+}
+
+void FreeSpaceMap::judgePoints(const Scan& s, const Eigen::Vector3f* world_points, std::size_t n,
+                               Sight* sights) const {
+  constexpr std::size_t kBlock = 256;
+  alignas(64) float zs[kBlock], ds[kBlock];
+  alignas(64) int rows[kBlock], cols[kBlock];
+  for (std::size_t first = 0; first < n; first += kBlock) {
+    const std::size_t m = std::min(kBlock, n - first);
+    locate(s, world_points + first, m, zs, ds, rows, cols);
+    // The pooled cells of a scan 1.5 s old are out of the caches: fetched ahead of their use.
+    constexpr std::size_t kAhead = 16;
+    const bool pooled = s.pooled.size() == s.range.size();
+    for (std::size_t i = 0; i < m; ++i) {
+      const std::size_t j = i + kAhead;
+      if (pooled && j < m && rows[j] >= 0 && rows[j] < rows_)
+        __builtin_prefetch(s.pooled.data() + static_cast<std::size_t>(rows[j]) * cols_ + cols[j]);
+      sights[first + i] = sightAt(s, zs[i], ds[i], rows[i], cols[i]);
+    }
+  }
+}
+
+FreeSpaceMap::Sight FreeSpaceMap::sightAt(const Scan& s, float z, float d, int row, int col,
+                                          WindowRead read) const {
+  if (!(d > 0.5f && d <= std::numeric_limits<float>::max())) return Sight::kUnknown;
   float nearest = 0.0f;
   bool beam = false, lost = false;
   if (read == WindowRead::kPooled && row >= 0 && row < rows_ &&
@@ -247,7 +368,7 @@ FreeSpaceMap::Sight FreeSpaceMap::judgePoint(const Scan& s, const Eigen::Vector3
     // cast there (see setNoReturnRange()). Not within the sensor's minimum range of that scan
     // either: a return closer than the shortest one reported would not have been reported (a van
     // beside the path, closer than a 3 m minimum range, was silent and "seen through").
-    if (!(q.z() < 0.0f && beam && passesOverGround(q.z() / d) && d > s.min_range + margin &&
+    if (!(z < 0.0f && beam && passesOverGround(z / d) && d > s.min_range + margin &&
           no_return_range_ > 0))
       return Sight::kUnknown;
     // Seen empty up to the no-return range only: nothing is known beyond it.
@@ -268,8 +389,9 @@ FreeSpaceMap::Evidence FreeSpaceMap::test(const std::vector<Eigen::Vector3f>& wo
   Evidence e;
   const Scan* s = scanWithReturns(frames_ago);
   if (!s) return e;
-  for (const auto& w : world_points) {
-    const Sight sight = judgePoint(*s, w);
+  std::vector<Sight> sights(world_points.size());
+  judgePoints(*s, world_points.data(), world_points.size(), sights.data());
+  for (const Sight sight : sights) {
     if (sight == Sight::kUnknown) continue;
     ++e.tested;
     if (sight == Sight::kThrough) ++e.seen_through;
@@ -287,7 +409,7 @@ void FreeSpaceMap::judge(const std::vector<Eigen::Vector3f>& world_points, int f
   sights.assign(world_points.size(), Sight::kUnknown);
   const Scan* s = scanWithReturns(frames_ago);
   if (!s) return;
-  for (std::size_t i = 0; i < world_points.size(); ++i) sights[i] = judgePoint(*s, world_points[i]);
+  judgePoints(*s, world_points.data(), world_points.size(), sights.data());
 }
 
 }  // namespace pcl_movers

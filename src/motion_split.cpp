@@ -11,17 +11,17 @@ namespace pcl_movers {
 
 using Sight = FreeSpaceMap::Sight;
 
-int MotionSplitter::split(int width, int height, const std::vector<float>& ranges,
-                          std::vector<pcl::PointIndices>& clusters, const Judge& judge) {
+std::vector<MotionSplitter::ClusterSplit> MotionSplitter::findSplits(
+    int width, int height, const std::vector<pcl::PointIndices>& clusters, const Judge& judge,
+    const Ranges& ranges) {
   const int min_points = std::max(1, parameters_.min_points);
   const int stride = std::max(1, parameters_.sample_stride);
-  std::vector<pcl::PointIndices> parts;
-  std::vector<std::size_t> emptied;  // clusters whose every point went into parts
+  std::vector<ClusterSplit> splits;
   if (member_.size() != static_cast<std::size_t>(width) * height)
     member_.assign(static_cast<std::size_t>(width) * height, -1);
   indexSampledCells(width, height);
   for (std::size_t c = 0; c < clusters.size(); ++c) {
-    auto& idx = clusters[c].indices;
+    const auto& idx = clusters[c].indices;
     const int n = static_cast<int>(idx.size());
     if (n < 2 * min_points) continue;  // no part and static rest of min_points each in it
     // One point in stride first. Only a cluster that holds both a moving part and a static
@@ -30,33 +30,62 @@ int MotionSplitter::split(int width, int height, const std::vector<float>& range
     // everywhere is static, and so are most clusters.
     sight_.assign(static_cast<std::size_t>(n), Sight::kUnknown);
     judged_.assign(static_cast<std::size_t>(n), 0);
+    positions_.clear();
+    for (int k = 0; k < n; ++k)
+      if (sampled_cells_[static_cast<std::size_t>(idx[k])]) positions_.push_back(k);
     int through = 0, at = 0;
-    for (int k = 0; k < n; ++k) {
-      if (!sampled_cells_[static_cast<std::size_t>(idx[k])]) continue;
-      sight_[k] = judge(c, static_cast<std::size_t>(k));
-      judged_[k] = 1;
-      through += sight_[k] == Sight::kThrough;
-      at += sight_[k] == Sight::kAt;
-    }
+    judgePositions(c, judge, through, at);
     if (through * stride < min_points || at * stride < min_points) continue;
     // Then every point: the parts grow from every seen-through point, and the cluster must hold
     // min_points of each kind.
-    through = at = 0;
-    for (int k = 0; k < n; ++k) {
-      if (!judged_[k]) sight_[k] = judge(c, static_cast<std::size_t>(k));
-      through += sight_[k] == Sight::kThrough;
-      at += sight_[k] == Sight::kAt;
-    }
+    positions_.clear();
+    for (int k = 0; k < n; ++k)
+      if (!judged_[static_cast<std::size_t>(k)]) positions_.push_back(k);
+    judgePositions(c, judge, through, at);
     if (through < min_points || at < min_points) continue;
-    const std::size_t first_part = parts.size();
-    growParts(width, height, ranges, clusters[c], sight_, through, parts);
-    if (parts.size() == first_part) continue;
+    ranges(c, ranges_);
+    auto parts = growParts(width, height, clusters[c], through);
+    if (!parts.empty()) splits.push_back(ClusterSplit{c, std::move(parts)});
+  }
+  return splits;
+}
+
+void MotionSplitter::judgePositions(std::size_t cluster, const Judge& judge, int& through,
+                                    int& at) {
+  if (positions_.empty()) return;
+  judge(cluster, positions_, judged_sights_);
+  for (std::size_t i = 0; i < positions_.size(); ++i) {
+    const auto k = static_cast<std::size_t>(positions_[i]);
+    sight_[k] = judged_sights_[i];
+    judged_[k] = 1;
+    through += sight_[k] == Sight::kThrough;
+    at += sight_[k] == Sight::kAt;
+  }
+}
+
+int MotionSplitter::applySplits(const std::vector<ClusterSplit>& splits,
+                                std::vector<pcl::PointIndices>& clusters) {
+  const int min_points = std::max(1, parameters_.min_points);
+  std::vector<pcl::PointIndices> parts;
+  std::vector<std::size_t> emptied;  // clusters whose rest is no object
+  for (const auto& split : splits) {
+    auto& idx = clusters[split.cluster].indices;
+    in_part_.assign(idx.size(), 0);
+    for (const auto& positions : split.parts) {
+      parts.emplace_back();
+      parts.back().header = clusters[split.cluster].header;
+      parts.back().indices.reserve(positions.size());
+      for (const int k : positions) {
+        parts.back().indices.push_back(idx[static_cast<std::size_t>(k)]);
+        in_part_[static_cast<std::size_t>(k)] = 1;
+      }
+    }
     // The static rest keeps the cluster's place; a rest under min_points is no object.
     std::size_t kept = 0;
-    for (int k = 0; k < n; ++k)
-      if (part_of_[k] == 0) idx[kept++] = idx[k];
+    for (std::size_t k = 0; k < idx.size(); ++k)
+      if (!in_part_[k]) idx[kept++] = idx[k];
     idx.resize(static_cast<int>(kept) >= min_points ? kept : 0);
-    if (idx.empty()) emptied.push_back(c);
+    if (idx.empty()) emptied.push_back(split.cluster);
   }
   const int found = static_cast<int>(parts.size());
   for (auto it = emptied.rbegin(); it != emptied.rend(); ++it)
@@ -84,8 +113,8 @@ void MotionSplitter::indexSampledCells(int width, int height) {
   sampled_stride_ = stride;
 }
 
-void MotionSplitter::forEachNeighbour(int width, int height, int cell,
-                                      const std::function<void(int)>& visit) const {
+template <typename Visit>
+void MotionSplitter::forEachNeighbour(int width, int height, int cell, const Visit& visit) const {
   // The 8 neighbours, and along a row past up to max_gap cells that hold no point of the cluster
   // (dropouts), as region growing bridges them; never past a point of the cluster.
   const int reach = std::max(0, parameters_.max_gap) + 1;
@@ -102,9 +131,10 @@ void MotionSplitter::forEachNeighbour(int width, int height, int cell,
   }
 }
 
-void MotionSplitter::growParts(int width, int height, const std::vector<float>& ranges,
-                               const pcl::PointIndices& cluster, const std::vector<Sight>& sight,
-                               int through_all, std::vector<pcl::PointIndices>& parts) {
+std::vector<std::vector<int>> MotionSplitter::growParts(int width, int height,
+                                                        const pcl::PointIndices& cluster,
+                                                        int through_all) {
+  const std::vector<Sight>& sight = sight_;
   const auto& idx = cluster.indices;
   const int n = static_cast<int>(idx.size());
   const int min_points = std::max(1, parameters_.min_points);
@@ -115,13 +145,13 @@ void MotionSplitter::growParts(int width, int height, const std::vector<float>& 
   // surface, while seen-through points of porous foliage lie at random depths among static ones.
   const auto joins = [&](int from, int to) {
     return sight[static_cast<std::size_t>(to)] != Sight::kAt &&
-           std::abs(ranges[static_cast<std::size_t>(idx[from])] -
-                    ranges[static_cast<std::size_t>(idx[to])]) <= parameters_.depth_step;
+           std::abs(ranges_[static_cast<std::size_t>(from)] -
+                    ranges_[static_cast<std::size_t>(to)]) <= parameters_.depth_step;
   };
   // part_of_: 0 = not in a part yet, kGrowing while grown, then kPart or kRejected; kGrouped
   // once in an output part.
   constexpr int kGrowing = 1, kPart = 2, kGrouped = 3, kRejected = -1;
-  const std::size_t first_part = parts.size();
+  std::vector<std::vector<int>> parts;
   int through_in_parts = 0;
   for (int seed = 0; seed < n; ++seed) {
     if (part_of_[seed] != 0 || sight[static_cast<std::size_t>(seed)] != Sight::kThrough) continue;
@@ -155,21 +185,17 @@ void MotionSplitter::growParts(int width, int height, const std::vector<float>& 
         part_of_[j] = kGrouped;
         queue_.push_back(j);
       });
-    parts.emplace_back();
-    parts.back().header = cluster.header;
-    for (const int k : queue_) parts.back().indices.push_back(idx[k]);
-    std::sort(parts.back().indices.begin(), parts.back().indices.end());
+    std::sort(queue_.begin(), queue_.end(), [&](int a, int b) { return idx[a] < idx[b]; });
+    parts.push_back(queue_);
   }
   // The parts must hold most of the cluster's seen-through points: a mover's evidence is
   // concentrated in it, while porous foliage is seen through here and there all over, and a few of
   // its patches happen to be smooth.
   const bool concentrated =
       through_in_parts >= parameters_.min_through_fraction * static_cast<float>(through_all);
-  if (!concentrated) parts.resize(first_part);
-  for (int k = 0; k < n; ++k) {
-    if (part_of_[k] == kRejected || !concentrated) part_of_[k] = 0;  // with the static rest
-    member_[static_cast<std::size_t>(idx[k])] = -1;
-  }
+  if (!concentrated) parts.clear();
+  for (int k = 0; k < n; ++k) member_[static_cast<std::size_t>(idx[k])] = -1;
+  return parts;
 }
 
 }  // namespace pcl_movers

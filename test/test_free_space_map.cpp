@@ -439,6 +439,22 @@ class FreeSpaceMapProbe : public pcl_movers::FreeSpaceMap {
     pooled = s ? judgePoint(*s, w) : Sight::kUnknown;
     direct = s ? judgePoint(*s, w, WindowRead::kDirect) : Sight::kUnknown;
   }
+  /** The cell that locate() gives `w` in the scan `frames_ago` back, and the one that the
+   * definition (cellRow() and cellCol() of the point's direction) gives; false without a scan
+   * or within 0.5 m of its sensor (never judged). */
+  bool cellsBothWays(const Eigen::Vector3f& w, int frames_ago, std::array<int, 2>& located,
+                     std::array<int, 2>& defined) const {
+    const Scan* s = scanWithReturns(frames_ago);
+    if (!s) return false;
+    float z = 0, d = 0;
+    locate(*s, &w, 1, &z, &d, &located[0], &located[1]);
+    if (!(d > 0.5f)) return false;
+    const Eigen::Vector3f q = s->world_to_sensor * w;
+    const float rxy = std::sqrt(q.x() * q.x() + q.y() * q.y());
+    defined = {cellRow(pcl_movers::detail::fastAtan2Deg(q.z(), rxy)),
+               cellCol(pcl_movers::detail::fastAtan2Deg(q.y(), q.x()))};
+    return true;
+  }
 };
 
 /** Random returns on the given beam elevations [deg], every `az_step` degrees, 15 % silent. */
@@ -455,12 +471,16 @@ Cloud randomScan(std::mt19937& rng, const std::vector<double>& elevations, doubl
   return cloud;
 }
 
-TEST(FreeSpaceMap, PooledWindowsJudgeAsTheWindowsReadCellByCell) {
+class PooledWindows : public ::testing::TestWithParam<bool> {};
+
+TEST_P(PooledWindows, JudgeAsTheWindowsReadCellByCell) {
   // The pooled cache must give what reading each window's cells gives, also after the beam rows
   // change (scans of other beam layouts come and go), after the window changes, and at the
-  // azimuth seam (columns wrap around).
+  // azimuth seam (columns wrap around); whether it is built on first use or whole as each scan
+  // is added (then rebuilt on use where the beam rows changed).
   std::mt19937 rng(7);
   FreeSpaceMapProbe map;
+  map.setPoolOnAdd(GetParam());
   map.setHistory(4);
   map.setSensorHeight(1.8);  // steep silent rays: lost returns
   map.setNoReturnRange(40.0);
@@ -468,7 +488,7 @@ TEST(FreeSpaceMap, PooledWindowsJudgeAsTheWindowsReadCellByCell) {
   const std::vector<double> sparse = {-15, -13, -11, -9, -7, -5, -3, -1, 1, 3, 5, 7, 9, 11, 13};
   std::uniform_real_distribution<float> xy(-50.0f, 50.0f), z(-3.0f, 4.0f);
   std::array<int, 4> sights{};
-  int compared = 0, mismatches = 0;
+  int compared = 0, mismatches = 0, batch_mismatches = 0, cell_mismatches = 0;
   for (int frame = 0; frame < 8; ++frame) {
     if (frame == 5) map.setWindow(1, 2);
     Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
@@ -477,24 +497,42 @@ TEST(FreeSpaceMap, PooledWindowsJudgeAsTheWindowsReadCellByCell) {
     const Cloud scan = randomScan(rng, frame % 3 == 2 ? sparse : dense, 0.4);
     map.addScan(scan, pose);
     std::uniform_int_distribution<std::size_t> returned(0, scan.size() - 1);
+    std::vector<Eigen::Vector3f> queries;
     for (int query = 0; query < 2000; ++query) {
       Eigen::Vector3f w(xy(rng), xy(rng), z(rng));
       if (query % 10 == 0) w.y() = 0.01f * w.y();  // behind the sensor: azimuth ±180°, the seam
       if (query % 4 == 1)  // where the latest scan has a return: occupied then, at least
         w = pose.cast<float>() * scan[returned(rng)].getVector3fMap();
-      for (int lag = 0; lag < map.size(); ++lag) {
+      queries.push_back(w);
+    }
+    for (int lag = 0; lag < map.size(); ++lag) {
+      // In one list (judgePoints(): blocks of points, the cells located together) as one by one.
+      std::vector<pcl_movers::FreeSpaceMap::Sight> listed;
+      map.judge(queries, lag, listed);
+      for (std::size_t q = 0; q < queries.size(); ++q) {
         pcl_movers::FreeSpaceMap::Sight pooled, direct;
-        map.judgeBothWays(w, lag, pooled, direct);
+        map.judgeBothWays(queries[q], lag, pooled, direct);
         ++compared;
         mismatches += pooled != direct;
+        batch_mismatches += listed[q] != pooled;
         ++sights[static_cast<std::size_t>(direct)];
+        std::array<int, 2> located{}, defined{};
+        if (map.cellsBothWays(queries[q], lag, located, defined))
+          cell_mismatches += located != defined;
       }
     }
   }
   EXPECT_EQ(mismatches, 0) << "of " << compared;
+  EXPECT_EQ(batch_mismatches, 0) << "of " << compared;
+  EXPECT_EQ(cell_mismatches, 0) << "of " << compared;
   for (std::size_t k = 0; k < sights.size(); ++k)
     EXPECT_GT(sights[k], compared / 100) << "sight " << k << " is rare: the test says little";
 }
+
+INSTANTIATE_TEST_SUITE_P(FreeSpaceMap, PooledWindows, ::testing::Values(false, true),
+                         [](const ::testing::TestParamInfo<bool>& info) {
+                           return info.param ? "PooledOnAdd" : "PooledOnUse";
+                         });
 
 TEST(FreeSpaceMap, FastAtan2IsAccurateToAThousandthOfADegree) {
   double worst = 0;

@@ -81,6 +81,13 @@ class FreeSpaceMap {
     versionWindowRows(true);
   }
 
+  /** \brief Pool each scan's windows whole when it is added, for users that judge points all
+   * over each scan (the detector's motion-aware segmentation judges every cluster), instead of a
+   * block of cells at a time on first use (default), which suits judging around a few objects:
+   * a whole scan costs about as much as the blocks that a tracker's tests need. */
+  void setPoolOnAdd(bool pool_on_add) { pool_on_add_ = pool_on_add; }
+  bool getPoolOnAdd() const { return pool_on_add_; }
+
   /** \brief Adds a scan (points in the sensor frame, NaN allowed) taken at `pose` (sensor→world).
    * The oldest scan is forgotten when more than `history` are stored. */
   template <typename PointT>
@@ -134,8 +141,9 @@ class FreeSpaceMap {
     /// Shortest range returned [m]: nothing closer is reported by the sensor (its minimum range),
     /// so a silent ray says nothing about the space up to there.
     float min_range = 0.0f;
-    /// What judgePoint() reads of this scan around each cell (see poolBlock()), built a block of
-    /// kPoolCols cells at a time on first use; a block is valid while its pooled_version equals
+    /// What judgePoint() reads of this scan around each cell (see poolBlock()): built whole when
+    /// the scan is added (poolScan()), and again a block of kPoolCols cells at a time, on use,
+    /// where the window rows changed since; a block is valid while its pooled_version equals
     /// the map's row_version_ of its row. A cache, hence mutable: a map is used by one thread at
     /// a time.
     mutable std::vector<float> pooled;
@@ -159,16 +167,31 @@ class FreeSpaceMap {
   /** \brief How judgePoint() reads a window: from the pooled cache (windowCell()), or cell by
    * cell (scanWindow(): the definition, kept for the rows outside the image and for tests). */
   enum class WindowRead : std::uint8_t { kPooled, kDirect };
-  /** \brief What scan `s` saw along the direction of world point `w`. */
+  /** \brief What scan `s` saw along the direction of world point `w` (locate() and
+   * sightAt()). */
   Sight judgePoint(const Scan& s, const Eigen::Vector3f& w,
                    WindowRead read = WindowRead::kPooled) const;
+  /** \brief Where world points lie in scan `s`'s frame: per point its height z, distance d
+   * and cell (row, column; as cellRow() and cellCol() give them, row out of range when d is
+   * not in (0.5 m, FLT_MAX]). The transform per point, the square roots, arc tangents and
+   * divisions in a loop that vectorizes. */
+  void locate(const Scan& s, const Eigen::Vector3f* world_points, std::size_t n, float* zs,
+              float* ds, int* rows, int* cols) const;
+  /** \brief What scan `s` saw along a direction located at (z, d, row, col) (locate()). */
+  Sight sightAt(const Scan& s, float z, float d, int row, int col,
+                WindowRead read = WindowRead::kPooled) const;
+  /** \brief judgePoint() of world_points[0..n) into sights, a block of points at a time
+   * (locate() together, then each point's pooled cell, fetched ahead: a scan 1.5 s old is out
+   * of the caches). */
+  void judgePoints(const Scan& s, const Eigen::Vector3f* world_points, std::size_t n,
+                   Sight* sights) const;
   /** \brief Reads the window around cell (row, col) of scan `s` cell by cell: its nearest return
    * (0: none), whether one of its rows is a beam and whether a steep ray of it was silent. The
    * definition of what windowCell() caches. */
   void scanWindow(const Scan& s, int row, int col, float& nearest, bool& beam, bool& lost) const;
   /** \brief Cell (row, col) of `s.pooled`; its block of kPoolCols cells is built first when it
    * is stale (poolBlock()). One lookup instead of the window's 15 or more cells per judged point:
-   * the split judges about 30k points per KITTI frame, and the window reads cost it 4-5 ms. */
+   * the split judges about 26k points per KITTI frame. */
   float windowCell(const Scan& s, int row, int col) const;
   /** \brief Builds `s.pooled` for the cells first_col..first_col + kPoolCols - 1 of `row`: per
    * cell, the min over its window's beam cells of their return, a silent steep ray counting -1
@@ -176,6 +199,13 @@ class FreeSpaceMap {
    * when it finds nothing, else the nearest return). Blocks, not rows: most scans are queried
    * around a few objects only (the tracker's tests: ~30 points per row queried). */
   void poolBlock(const Scan& s, int row, int first_col) const;
+  /** \brief Builds every block of `s.pooled` (the newest scan, after indexBeamRows()) in two
+   * passes: per beam row, the min over each cell's window columns; then per row, the min of
+   * those over its window's beam rows. The same values as poolBlock(), from an image still in
+   * the caches, and each beam row's columns pooled once instead of once per window holding it.
+   * Built on first use instead, the blocks of a scan 1.5 s old waited on memory most of the
+   * time (see docs/design.md). */
+  void poolScan(Scan& s);
   static constexpr int kPoolCols = 32;
   int poolBlocksPerRow() const { return (cols_ + kPoolCols - 1) / kPoolCols; }
 
@@ -210,6 +240,7 @@ class FreeSpaceMap {
   double no_return_range_ = 0;
   double sensor_height_ = 0;
   int win_rows_ = 2, win_cols_ = 1;
+  bool pool_on_add_ = false;
   std::deque<Scan> scans_;
   /// Rows with a return in some stored scan (the sensor's beams: between the beams of a sparse
   /// sensor, VLP-16 2° = 10 rows apart, a cell is empty because no ray was cast there), and per
@@ -232,6 +263,7 @@ class FreeSpaceMap {
   std::vector<WindowRows> window_rows_;
   std::vector<std::uint64_t> row_version_;  ///< per row; changes when window_rows_[row] does
   std::uint64_t next_version_ = 1;
+  std::vector<float> row_minima_;  ///< poolScan(): per beam row, the min over each cell's columns
 };
 
 // ----------------------------------------------------------------------------- implementation
@@ -292,6 +324,7 @@ void FreeSpaceMap::addScan(const pcl::PointCloud<PointT>& scan, const Eigen::Iso
   }
   scans_.push_front(std::move(s));
   indexBeamRows();
+  if (pool_on_add_) poolScan(scans_.front());
 }
 
 }  // namespace pcl_movers

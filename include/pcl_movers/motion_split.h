@@ -53,31 +53,60 @@ class MotionSplitter {
     int sample_stride = 4;
   };
 
-  /** \brief What the earlier scan saw along point k of cluster c (called once per point at
-   * most, and only for the points the split needs: a sample, then every point of the clusters
-   * the sample shows mixed). */
-  using Judge = std::function<FreeSpaceMap::Sight(std::size_t cluster, std::size_t k)>;
+  /** \brief What the earlier scan saw along points of cluster c: `sights[i]` for its point at
+   * position `positions[i]` of its indices (sights is resized). Called at most twice per cluster,
+   * for a sample and then for the rest of a cluster the sample shows mixed: whole lists, so that
+   * a judge can work through them in one pass. */
+  using Judge = std::function<void(std::size_t cluster, const std::vector<int>& positions,
+                                   std::vector<FreeSpaceMap::Sight>& sights)>;
+  /** \brief The distance from the sensor of each point of cluster c (`ranges[k]` for its k-th
+   * point; ranges is resized). Asked only of the clusters whose parts are grown. */
+  using Ranges = std::function<void(std::size_t cluster, std::vector<float>& ranges)>;
+
+  /** \brief The moving parts found in one cluster. */
+  struct ClusterSplit {
+    std::size_t cluster = 0;
+    /// Per part, the positions (into the cluster's indices) of its points, in the order of
+    /// their cells. The rest of the cluster is its static surface.
+    std::vector<std::vector<int>> parts;
+  };
 
   void setParameters(const Parameters& parameters) { parameters_ = parameters; }
   const Parameters& getParameters() const { return parameters_; }
 
-  /** \brief Splits `clusters` (indices into a `width` × `height` range image) in place: a
+  /** \brief The clusters (indices into a `width` × `height` range image) that hold both a
+   * moving part and a static surface, and their parts; in the order of the clusters.
+   * \param[in] judge what the earlier scan saw along a cluster's points
+   * \param[in] ranges distances from the sensor of a cluster's points */
+  std::vector<ClusterSplit> findSplits(int width, int height,
+                                       const std::vector<pcl::PointIndices>& clusters,
+                                       const Judge& judge, const Ranges& ranges);
+
+  /** \brief Applies `splits` (of findSplits() on the same clusters, or on a list whose indices
+   * correspond to theirs position by position, as a cluster's world points do) in place: a
    * split cluster keeps its static rest in its place (removed when under min_points), the parts
    * are appended after all clusters.
-   * \param[in] ranges distance from the sensor of every cell (only the cells of clusters of at
-   * least 2 · min_points points are read)
-   * \param[in] judge what the earlier scan saw along a cluster's point
+   * \return the number of parts split off */
+  int applySplits(const std::vector<ClusterSplit>& splits,
+                  std::vector<pcl::PointIndices>& clusters);
+
+  /** \brief findSplits() and applySplits() on `clusters`.
    * \return the number of parts split off (0: `clusters` unchanged) */
-  int split(int width, int height, const std::vector<float>& ranges,
-            std::vector<pcl::PointIndices>& clusters, const Judge& judge);
+  int split(int width, int height, std::vector<pcl::PointIndices>& clusters, const Judge& judge,
+            const Ranges& ranges) {
+    return applySplits(findSplits(width, height, clusters, judge, ranges), clusters);
+  }
 
  protected:
-  /** \brief The parts of one cluster grown from its seen-through points; appends them to
-   * `parts` when they hold half of the cluster's `through_all` seen-through points, and marks
-   * their points in part_of_ (non-zero). */
-  void growParts(int width, int height, const std::vector<float>& ranges,
-                 const pcl::PointIndices& cluster, const std::vector<FreeSpaceMap::Sight>& sight,
-                 int through_all, std::vector<pcl::PointIndices>& parts);
+  /** \brief The parts of one cluster grown from its seen-through points (positions ordered by
+   * cell); empty unless they hold half of the cluster's `through_all` seen-through points.
+   * Reads sight_ and ranges_. */
+  std::vector<std::vector<int>> growParts(int width, int height, const pcl::PointIndices& cluster,
+                                          int through_all);
+
+  /** \brief Judges the points at positions_ of `cluster` into sight_ (marking them judged_)
+   * and adds the seen-through and seen-where-they-are ones to `through` and `at`. */
+  void judgePositions(std::size_t cluster, const Judge& judge, int& through, int& at);
 
   /** \brief `cell` is one of the points judged first (and a seed of the parts). */
   bool sampled(int width, int cell) const;
@@ -85,17 +114,22 @@ class MotionSplitter {
    * size or the stride changed: a byte read per point then, not two integer divisions (about a
    * quarter of the split's time on a KITTI frame went to them). */
   void indexSampledCells(int width, int height);
-  /** \brief Calls `visit(position)` for the cluster's points next to `cell` in the image. */
-  void forEachNeighbour(int width, int height, int cell,
-                        const std::function<void(int)>& visit) const;
+  /** \brief Calls `visit(position)` for the cluster's points next to `cell` in the image (a
+   * template, not a std::function: it is called for every neighbour of every grown point). */
+  template <typename Visit>
+  void forEachNeighbour(int width, int height, int cell, const Visit& visit) const;
 
   Parameters parameters_;
   std::vector<int> member_;   ///< per cell: position in the cluster being split, or -1
   std::vector<int> part_of_;  ///< per position of that cluster: non-zero when in a part
   std::vector<int> queue_;
-  std::vector<FreeSpaceMap::Sight> sight_;   ///< per point of the cluster being split, once judged
-  std::vector<std::uint8_t> judged_;         ///< per point of that cluster: sight_ is set
-  std::vector<std::uint8_t> sampled_cells_;  ///< sampled() per cell (indexSampledCells())
+  std::vector<FreeSpaceMap::Sight> sight_;  ///< per point of the cluster being split, once judged
+  std::vector<std::uint8_t> judged_;        ///< per point of that cluster: sight_ is set
+  std::vector<int> positions_;              ///< points of that cluster to be judged
+  std::vector<FreeSpaceMap::Sight> judged_sights_;  ///< the judge's answer for positions_
+  std::vector<float> ranges_;                       ///< per point of that cluster: its distance
+  std::vector<std::uint8_t> in_part_;               ///< applySplits(): per position, in a part
+  std::vector<std::uint8_t> sampled_cells_;         ///< sampled() per cell (indexSampledCells())
   int sampled_width_ = 0, sampled_stride_ = 0;
 };
 

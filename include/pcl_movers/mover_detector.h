@@ -180,7 +180,7 @@ class MoverDetector {
    * where it is, and remaps `world_clusters` to the new clusters (`world` keeps its points).
    * Needs the current scan in the free-space map. */
   void splitMovingParts(const PointCloud& organized, const Eigen::Isometry3d& pose,
-                        std::vector<pcl::PointIndices>& clusters, PointCloud& world,
+                        std::vector<pcl::PointIndices>& clusters, const PointCloud& world,
                         std::vector<pcl::PointIndices>& world_clusters);
 
   /** \brief Forgets all tracks and the origin (start of a new sequence). */
@@ -236,8 +236,7 @@ class MoverDetector {
   std::vector<double> floor_z_;      ///< what each cluster stands on, world z (NaN: none), tracker
   std::vector<float> ground_under_;  ///< groundFloors()' work buffer, kept between frames
   MotionSplitter splitter_;          ///< splitMovingParts()' splitter and its buffers
-  std::vector<float> cell_ranges_;   ///< splitMovingParts(): distance of each cluster cell
-  std::vector<int> world_of_cell_;   ///< splitMovingParts(): world index of each cluster cell
+  std::vector<Eigen::Vector3f> split_points_;  ///< splitMovingParts(): world points to judge
   StageObject<RangeImageOrganizer<PointT>> organizer_;
   StageObject<GroundPlaneFilter<PointT>> ground_;
   StageObject<RangeImageRegionGrowing<PointT>> segmenter_;

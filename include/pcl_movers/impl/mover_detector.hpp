@@ -213,7 +213,7 @@ template <typename PointT>
 void MoverDetector<PointT>::splitMovingParts(const PointCloud& organized,
                                              const Eigen::Isometry3d& pose,
                                              std::vector<pcl::PointIndices>& clusters,
-                                             PointCloud& world,
+                                             const PointCloud& world,
                                              std::vector<pcl::PointIndices>& world_clusters) {
   const auto& p = parameters_;
   // The long lag (see MotionSplitter); in a sequence's first frames the oldest scan, once it is
@@ -227,32 +227,30 @@ void MoverDetector<PointT>::splitMovingParts(const PointCloud& organized,
   sp.depth_step = static_cast<float>(p.segment.depth_min);
   sp.min_through_fraction = static_cast<float>(p.free_space.long_min_fraction);
   splitter_.setParameters(sp);
-  cell_ranges_.resize(organized.size());
-  world_of_cell_.resize(organized.size());
-  for (const auto& cluster : clusters) {
-    if (static_cast<int>(cluster.indices.size()) < 2 * sp.min_points) continue;  // never split
-    for (const auto i : cluster.indices)
-      cell_ranges_[static_cast<std::size_t>(i)] =
-          organized[static_cast<std::size_t>(i)].getVector3fMap().norm();
-  }
-  const auto judge = [&](std::size_t c, std::size_t k) {
-    return free_space_.judge(world[world_clusters[c].indices[k]].getVector3fMap(), lag);
+  // Judged in lists: the points are gathered, and the map works through them in one pass.
+  const auto judge = [&](std::size_t c, const std::vector<int>& positions,
+                         std::vector<FreeSpaceMap::Sight>& sights) {
+    const auto& world_idx = world_clusters[c].indices;
+    split_points_.resize(positions.size());
+    for (std::size_t i = 0; i < positions.size(); ++i)
+      split_points_[i] =
+          world[static_cast<std::size_t>(world_idx[static_cast<std::size_t>(positions[i])])]
+              .getVector3fMap();
+    free_space_.judge(split_points_, lag, sights);
   };
-  // The world points stay where they are: only which cluster each belongs to changes.
-  for (std::size_t c = 0; c < clusters.size(); ++c)
-    for (std::size_t k = 0; k < clusters[c].indices.size(); ++k)
-      world_of_cell_[static_cast<std::size_t>(clusters[c].indices[k])] =
-          world_clusters[c].indices[k];
-  if (splitter_.split(static_cast<int>(organized.width), static_cast<int>(organized.height),
-                      cell_ranges_, clusters, judge) == 0)
-    return;
-  world_clusters.resize(clusters.size());
-  for (std::size_t c = 0; c < clusters.size(); ++c) {
-    world_clusters[c].indices.resize(clusters[c].indices.size());
-    for (std::size_t k = 0; k < clusters[c].indices.size(); ++k)
-      world_clusters[c].indices[k] =
-          world_of_cell_[static_cast<std::size_t>(clusters[c].indices[k])];
-  }
+  const auto ranges = [&](std::size_t c, std::vector<float>& out) {
+    const auto& idx = clusters[c].indices;
+    out.resize(idx.size());
+    for (std::size_t k = 0; k < idx.size(); ++k)
+      out[k] = organized[static_cast<std::size_t>(idx[k])].getVector3fMap().norm();
+  };
+  const auto splits =
+      splitter_.findSplits(static_cast<int>(organized.width), static_cast<int>(organized.height),
+                           clusters, judge, ranges);
+  // The world points stay where they are: only which cluster each belongs to changes, as it
+  // does for the cluster's cells (world_clusters[c] holds cluster c's points in its order).
+  splitter_.applySplits(splits, clusters);
+  splitter_.applySplits(splits, world_clusters);
 }
 
 template <typename PointT>
@@ -309,6 +307,7 @@ void MoverDetector<PointT>::process(const PointCloudConstPtr& scan,
     free_space_.setMargin(p.free_space.margin, p.free_space.margin_per_metre);
     free_space_.setNoReturnRange(p.free_space.no_return ? p.track.max_range : 0.0);
     free_space_.setSensorHeight(p.ground.sensor_height);
+    free_space_.setPoolOnAdd(p.free_space.split);  // the split judges every cluster
     free_space_.addScan(*organized, pose);
     tracker_.setFreeSpaceMap(&free_space_);
     split_start = Clock::now();
