@@ -58,6 +58,17 @@ void FreeSpaceMap::computeCells(const float* xs, const float* ys, const float* z
   }
 }
 
+void FreeSpaceMap::clearRange(Scan& s) const {
+  const auto rows = static_cast<std::size_t>(rows_), cols = static_cast<std::size_t>(cols_);
+  if (s.range.size() != rows * cols || s.sampled_rows.size() != rows) {
+    s.range.assign(rows * cols, 0.0f);
+    return;
+  }
+  for (std::size_t r = 0; r < rows; ++r)  // every return stored was in a sampled row
+    if (s.sampled_rows[r])
+      std::fill_n(s.range.begin() + static_cast<std::ptrdiff_t>(r * cols), cols, 0.0f);
+}
+
 void FreeSpaceMap::addBlindScan() {
   if (scans_.size() >= static_cast<std::size_t>(history_)) scans_.pop_back();
   scans_.emplace_front();

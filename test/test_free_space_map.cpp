@@ -294,6 +294,26 @@ TEST(FreeSpaceMap, HistoryIsBoundedAndMissingScanGivesNoEvidence) {
   EXPECT_THROW(map.setResolution(0, 0.2), std::invalid_argument);
 }
 
+// A scan added in the memory of the oldest one keeps none of its returns (only the rows the old
+// scan wrote are cleared, and those are all it wrote).
+TEST(FreeSpaceMap, AScanReusingTheOldestOnesMemoryKeepsNoneOfItsReturns) {
+  pcl_movers::FreeSpaceMap map;
+  map.setHistory(1);
+  Cloud ahead, behind;  // a wall 10 m ahead, then one 10 m behind on the same beams
+  for (int i = -20; i <= 20; ++i)
+    for (const float z : {-0.5f, 0.0f, 0.5f}) {
+      ahead.push_back(pcl::PointXYZ(10.0f, 0.2f * i, z));
+      behind.push_back(pcl::PointXYZ(-10.0f, 0.2f * i, z));
+    }
+  map.addScan(ahead, Eigen::Isometry3d::Identity());
+  const Eigen::Vector3f on_wall(10.0f, 0.0f, 0.0f);
+  ASSERT_EQ(map.judge(on_wall, 0), pcl_movers::FreeSpaceMap::Sight::kAt);
+  map.addScan(behind, Eigen::Isometry3d::Identity());
+  EXPECT_EQ(map.judge(on_wall, 0), pcl_movers::FreeSpaceMap::Sight::kUnknown);  // no return
+  EXPECT_EQ(map.judge(Eigen::Vector3f(-10.0f, 0.0f, 0.0f), 0),
+            pcl_movers::FreeSpaceMap::Sight::kAt);
+}
+
 namespace {
 
 /** Runs the tracker over frames of a ray-cast scene; `cluster_of(frame, scan)` gives the world

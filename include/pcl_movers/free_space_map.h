@@ -153,6 +153,10 @@ class FreeSpaceMap {
    * (not finite, under 0.5 m, outside the rows); ranges[i] = its range. */
   void computeCells(const float* xs, const float* ys, const float* zs, std::size_t n, int* cells,
                     float* ranges) const;
+  /** \brief Sets every cell of `s.range` to 0 (no return) for a new scan: only the rows that
+   * the scan whose memory it reuses wrote, when the layout is the same (a sensor's beams cover
+   * a fraction of the rows; the others are still clear). */
+  void clearRange(Scan& s) const;
   /** \brief A ray at this elevation (its sine) stays above the ground up to the no-return range
    * (see setSensorHeight()). */
   bool passesOverGround(float sin_elevation) const;
@@ -295,7 +299,7 @@ void FreeSpaceMap::addScan(const pcl::PointCloud<PointT>& scan, const Eigen::Iso
     scans_.pop_back();
   }
   s.world_to_sensor = pose.inverse().cast<float>();
-  s.range.assign(static_cast<std::size_t>(rows_) * cols_, 0.0f);
+  clearRange(s);
   s.pooled_version.assign(static_cast<std::size_t>(rows_) * poolBlocksPerRow(), 0);  // none yet
   s.sampled_rows.assign(static_cast<std::size_t>(rows_), 0);
   s.min_range = std::numeric_limits<float>::max();
