@@ -88,6 +88,7 @@ int MotionSplitter::applySplits(const std::vector<ClusterSplit>& splits,
     if (idx.empty()) emptied.push_back(split.cluster);
   }
   const int found = static_cast<int>(parts.size());
+  std::sort(emptied.begin(), emptied.end());  // erased from the back, whatever the splits' order
   for (auto it = emptied.rbegin(); it != emptied.rend(); ++it)
     clusters.erase(clusters.begin() + static_cast<std::ptrdiff_t>(*it));
   for (auto& part : parts) clusters.push_back(std::move(part));

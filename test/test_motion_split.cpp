@@ -100,6 +100,26 @@ TEST(MotionSplitter, AppliesASplitToACorrespondingListPositionByPosition) {
   }
 }
 
+// Splits whose static rests are under min_points remove their clusters, in whatever order the
+// splits come; the parts follow the clusters in the splits' order.
+TEST(MotionSplitter, AppliedSplitsRemoveClustersLeftWithTooFewPointsInAnyOrder) {
+  std::vector<pcl::PointIndices> clusters(3);
+  for (int c = 0; c < 3; ++c)
+    for (int k = 0; k < 20; ++k) clusters[c].indices.push_back(100 * c + k);
+  std::vector<int> all_but_three(17);
+  for (int k = 0; k < 17; ++k) all_but_three[k] = k + 3;  // a rest of 3 < min_points (8)
+  const std::vector<pcl_movers::MotionSplitter::ClusterSplit> splits = {{1, {all_but_three}},
+                                                                        {0, {all_but_three}}};
+  pcl_movers::MotionSplitter splitter;
+  EXPECT_EQ(splitter.applySplits(splits, clusters), 2);
+  ASSERT_EQ(clusters.size(), 3u);  // cluster 2, then the parts of clusters 1 and 0
+  EXPECT_EQ(clusters[0].indices.size(), 20u);
+  EXPECT_EQ(clusters[0].indices.front(), 200);
+  EXPECT_EQ(clusters[1].indices.front(), 103);
+  EXPECT_EQ(clusters[2].indices.front(), 3);
+  EXPECT_EQ(clusters[2].indices.size(), 17u);
+}
+
 TEST(MotionSplitter, GrowsOverHiddenPointsOfThePartsSurfaceOnly) {
   WallAndWalker scene(Sight::kThrough);
   // The walker's lower half was hidden back then (by something nearer): it continues the

@@ -85,7 +85,7 @@ class MotionSplitter {
   /** \brief Applies `splits` (of findSplits() on the same clusters, or on a list whose indices
    * correspond to theirs position by position, as a cluster's world points do) in place: a
    * split cluster keeps its static rest in its place (removed when under min_points), the parts
-   * are appended after all clusters.
+   * are appended after all clusters, in the order of `splits`.
    * \return the number of parts split off */
   int applySplits(const std::vector<ClusterSplit>& splits,
                   std::vector<pcl::PointIndices>& clusters);
