@@ -174,8 +174,7 @@ void FreeSpaceMap::scanWindow(const Scan& s, int row, int col, float& nearest, b
     beam = true;
     const bool steep = !over_ground_rows_[static_cast<std::size_t>(r)];
     for (int dc = -win_cols_; dc <= win_cols_; ++dc) {
-      int c = col + dc;
-      c = c >= cols_ ? c - cols_ : (c < 0 ? c + cols_ : c);
+      const int c = wrapCol(col + dc);
       const float v = s.range[static_cast<std::size_t>(r) * cols_ + c];
       if (v > 0.0f && (nearest == 0.0f || v < nearest)) nearest = v;
       lost = lost || (v == 0.0f && steep);
@@ -217,9 +216,7 @@ void FreeSpaceMap::poolBlock(const Scan& s, int row, int first_col) const {
     for (int dc = -w; dc <= w; ++dc) {
       if (wraps) {
         for (int c = first_col; c < end_col; ++c) {
-          int src = c + dc;
-          src = src >= cols_ ? src - cols_ : (src < 0 ? src + cols_ : src);
-          const float v = in[src];
+          const float v = in[wrapCol(c + dc)];
           pool[c - first_col] = std::min(pool[c - first_col], v > 0.0f ? v : silent);
         }
       } else {
@@ -249,8 +246,7 @@ void FreeSpaceMap::poolScan(Scan& s) {
     const float* in = s.range.data() + k * cols;
     float* out = row_minima_.data() + k * cols;
     const auto mapped = [&](int c) {
-      c = c >= cols_ ? c - cols_ : (c < 0 ? c + cols_ : c);
-      const float v = in[c];
+      const float v = in[wrapCol(c)];
       return v > 0.0f ? v : silent;
     };
     const int middle_begin = std::min(w, cols_), middle_end = std::max(middle_begin, cols_ - w);
@@ -400,12 +396,17 @@ FreeSpaceMap::Evidence FreeSpaceMap::test(const std::vector<Eigen::Vector3f>& wo
   Evidence e;
   const Scan* s = scanWithReturns(frames_ago);
   if (!s) return e;
-  std::vector<Sight> sights(world_points.size());
-  judgePoints(*s, world_points.data(), world_points.size(), sights.data());
-  for (const Sight sight : sights) {
-    if (sight == Sight::kUnknown) continue;
-    ++e.tested;
-    if (sight == Sight::kThrough) ++e.seen_through;
+  // A chunk at a time on the stack: the tracker tests every track every frame.
+  constexpr std::size_t kChunk = 256;
+  Sight sights[kChunk];
+  for (std::size_t first = 0; first < world_points.size(); first += kChunk) {
+    const std::size_t m = std::min(kChunk, world_points.size() - first);
+    judgePoints(*s, world_points.data() + first, m, sights);
+    for (std::size_t i = 0; i < m; ++i) {
+      if (sights[i] == Sight::kUnknown) continue;
+      ++e.tested;
+      if (sights[i] == Sight::kThrough) ++e.seen_through;
+    }
   }
   return e;
 }

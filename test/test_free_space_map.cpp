@@ -575,8 +575,9 @@ class CellProbe : public pcl_movers::FreeSpaceMap {
   using FreeSpaceMap::computeCells;
   int cols() const { return cols_; }
   int rows() const { return rows_; }
-  /** The cell of test(): row and column from the division-based cellRow() / cellCol(), and how
-   * far the direction lies from the nearest row and column edges [cells]. */
+  /** The cell of a judged point: row and column from the division-based cellRow() / cellCol()
+   * (locate() computes the same: PooledWindows checks it), and how far the direction lies from
+   * the nearest row and column edges [cells]. */
   int scalarCell(float x, float y, float z, float* row_edge, float* col_edge) const {
     const float rxy = std::sqrt(x * x + y * y);
     const float el = pcl_movers::detail::fastAtan2Deg(z, rxy);
@@ -591,8 +592,8 @@ class CellProbe : public pcl_movers::FreeSpaceMap {
 
 TEST(FreeSpaceMap, VectorizedCellsMatchTheScalarCells) {
   // addScan() computes cells in a branch-free loop the compiler vectorizes (reciprocal multiply,
-  // floor by truncation, selects for invalid points); test() looks cells up with cellRow() and
-  // cellCol(). Both must agree, except within float rounding of a cell edge, and invalid points
+  // floor by truncation, selects for invalid points); judged points have the cells of cellRow()
+  // and cellCol(). Both must agree, except within float rounding of a cell edge, and invalid points
   // (NaN, Inf, closer than 0.5 m, outside the elevation rows) must get no cell.
   CellProbe map;
   std::mt19937 rng(7);

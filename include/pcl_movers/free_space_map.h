@@ -227,13 +227,16 @@ class FreeSpaceMap {
    * "seen through" (VLP-16, 2° between beams: a parked van passed at 2 m was a mover). */
   void windowRows(int row, int& lo, int& hi) const;
   static constexpr int kMaxBeamGapRows = 25;
+  /** \brief The row and column of a direction: the definition that locate() computes in its
+   * vectorized loop (and the tests compare it with). */
   int cellRow(float elevation_deg) const {
     return static_cast<int>(std::floor((elevation_deg - min_el_deg_) / el_res_deg_));
   }
   int cellCol(float azimuth_deg) const {
-    int c = static_cast<int>(std::floor((azimuth_deg + 180.0f) / az_res_deg_));
-    return c >= cols_ ? c - cols_ : (c < 0 ? c + cols_ : c);
+    return wrapCol(static_cast<int>(std::floor((azimuth_deg + 180.0f) / az_res_deg_)));
   }
+  /** \brief Column `c` (at most one turn off the image) wrapped across the azimuth seam. */
+  int wrapCol(int c) const { return c >= cols_ ? c - cols_ : (c < 0 ? c + cols_ : c); }
 
   int history_ = 8;
   float az_res_deg_ = 0.2f, el_res_deg_ = 0.2f;
