@@ -45,7 +45,9 @@ struct Options {
   // scoring
   int min_points = 30;
   float min_fraction = 0.8f;
-  std::string sensor = "hdl64";
+  /// auto, as pcl_movers_ground and pcl_movers_detect: the scores are those of the tools'
+  /// defaults (a preset name organizes every scan by that preset's beams instead).
+  std::string sensor = "auto";
   int first = 0, last = std::numeric_limits<int>::max();
   std::vector<std::string> kitti, sequences;
 };
@@ -62,7 +64,8 @@ pcl_movers::tools::OptionTable optionTable() {
         "a sequence folder with labels/NNNNNN.label (pcl_movers_simulate output)"},
        {"--frames", "A-B", "frame index range within each input", "all"},
        {"--sensor", "NAME",
-        "beam layout used to organize unorganized scans: hdl64, hdl32, vlp16,\nos1_64, ladar2d",
+        "beam layout used to organize unorganized scans: auto (estimated from each\nscan, as "
+        "pcl_movers_ground does), hdl64, hdl32, vlp16, os1_64, ladar2d",
         d.sensor},
        {"", "", "\nGround removal:"}});
   table.add(d.ground.options());
@@ -188,7 +191,7 @@ void scoreFrame(const Frame& frame, const Options& opt, Result& result) {
   // Organize first (pass-through for organized scans): the pipeline (MoverDetector) runs the
   // ground filter on the range image, where its local-slope test has beam neighbours.
   pcl_movers::RangeImageOrganizer<Point> organizer;
-  organizer.setSensorModel(pcl_movers::SensorModel::fromName(opt.sensor));
+  if (opt.sensor != "auto") organizer.setSensorModel(pcl_movers::SensorModel::fromName(opt.sensor));
   organizer.setInputCloud(cloud);
   Cloud::Ptr image(new Cloud);
   auto t0 = std::chrono::steady_clock::now();
@@ -265,7 +268,8 @@ void scoreFrame(const Frame& frame, const Options& opt, Result& result) {
     }
   pcl_movers::RangeImageRegionGrowing<Point> rg;
   rg.setParameters(opt.segment.parameters);
-  rg.setWrapAround(pcl_movers::SensorModel::fromName(opt.sensor).isFullRevolution());
+  // Organized input keeps its rows and columns (a full revolution, as the detector assumes).
+  rg.setWrapAround(organizer.wasPassThrough() || organizer.getSensorModel().isFullRevolution());
   rg.setInputCloud(image);
   std::vector<pcl::PointIndices> clusters;
   t0 = std::chrono::steady_clock::now();
@@ -335,7 +339,7 @@ int run(int argc, char** argv) {
     if (opt.min_fraction > 1) throw InputError("--min-fraction: must be <= 1");
   }
   if (args.get("--sensor", v)) opt.sensor = v;
-  pcl_movers::SensorModel::fromName(opt.sensor);  // throws on an unknown name
+  if (opt.sensor != "auto") pcl_movers::SensorModel::fromName(opt.sensor);  // throws on a bad name
   if (args.get("--frames", v)) {
     const auto dash = v.find('-');
     if (dash == std::string::npos) {
