@@ -150,14 +150,13 @@ struct StageOptions {
 inline StageOptions<GroundParameters> groundOptions() {
   return {GroundParameters(), {{"max_slope_deg", {"--tilt-deg"}}}};
 }
-/** \brief The segmentation options; --k, --floor, --gap, --bridge and --min-size are older
+/** \brief The segmentation options; --k, --floor, --gap and --min-size are older
  * spellings. */
 inline StageOptions<SegmentationParameters> segmentationOptions() {
   return {SegmentationParameters(),
           {{"depth_ratio", {"--k"}},
            {"depth_min", {"--floor"}},
            {"max_gap", {"--gap"}},
-           {"row_bridge", {"--bridge"}},
            {"min_cluster_points", {"--min-size"}}}};
 }
 

@@ -79,7 +79,7 @@ if [[ ${#args[@]} -gt 0 ]]; then
   echo "$header"
   echo "$rule"
   for setting in "--local-slope 0" "--local-slope-deg 10" "--local-slope-deg 15" \
-    "--local-slope-deg 20" "--local-slope-deg 25" "--local-slope-deg 30" "--range-noise 0.03"; do
+    "--local-slope-deg 20" "--local-slope-deg 25" "--local-slope-deg 30"; do
     # shellcheck disable=SC2086
     out=$("$eval_bin" "${args[@]}" $setting 2>/dev/null)
     row="| \`$setting\` |"
@@ -100,8 +100,7 @@ if [[ -f "$kitti/labels/000000.label" ]]; then
   echo "| setting | ground precision | ground recall | recovered | not merged | over-segmented | merged |"
   echo "|---|---|---|---|---|---|---|"
   for setting in "--depth-ratio 0.03" "--depth-ratio 0.04" "--max-gap 0" "--max-gap 3" \
-    "--row-bridge 0.3" "--row-bridge 0.5" "--row-bridge 1" "--distance 0.15" "--distance 0.25" \
-    "--max-slope-deg 10"; do
+    "--distance 0.15" "--distance 0.25" "--max-slope-deg 10"; do
     # shellcheck disable=SC2086
     out=$("$eval_bin" --kitti "$kitti" $setting 2>/dev/null)
     g=$(echo "$out" | grep '^| kitti' | sed -n 1p | awk -F'|' '{print $4 "|" $5}')

@@ -343,10 +343,30 @@ TEST(DetectorParameters, StageKeysLegacyKeysAndSwitches) {
   EXPECT_EQ(pcl_movers::DetectorParameters::canonicalKey("free-space-lag"), "free_space.lag");
   EXPECT_THROW(p.set("decision.latch", "2", "cli"), pcl_movers::InputError);
   EXPECT_THROW(p.set("ground.distance_m", "1", "cli"), pcl_movers::InputError);
-  // Every legacy key names a current one.
-  const auto keys = p.keys();
+  // Every legacy key names a current key or a constant of a rule.
+  auto names = p.keys();
+  const auto settings = names.size();
+  p.forEachConstant(
+      [&](const std::string& key, const auto&, const char*) { names.push_back(key); });
   for (const auto& legacy : pcl_movers::DetectorParameters::legacyKeys())
-    EXPECT_NE(std::find(keys.begin(), keys.end(), legacy.second), keys.end()) << legacy.first;
+    EXPECT_NE(std::find(names.begin(), names.end(), legacy.second), names.end()) << legacy.first;
+  // Keys and constants are disjoint, and the constants are read in the config's own units.
+  EXPECT_EQ(std::set<std::string>(names.begin(), names.end()).size(), names.size());
+  EXPECT_GT(names.size(), settings);
+  // A constant set to its own value is ignored (old configs print every value); any other value
+  // is an error naming the key, never silently a different run.
+  p.set("registration.turn_yaw_step_deg", "5", "cli");
+  p.set("max_registration_points", "100", "cli");  // a flat key of earlier versions
+  EXPECT_DOUBLE_EQ(p.registration.turn_yaw_step_deg, 5.0);
+  try {
+    p.set("registration.turn_yaw_step_deg", "7", "cfg:3");
+    FAIL() << "a constant changed through a config key";
+  } catch (const pcl_movers::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("cfg:3: 'registration.turn_yaw_step_deg' is no longer"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_DOUBLE_EQ(p.registration.turn_yaw_step_deg, 5.0);
   // The config round trip writes switches as true/false and reads them back.
   const std::string config = p.toConfig();
   EXPECT_NE(config.find("decision.latch = false"), std::string::npos);

@@ -60,6 +60,15 @@ struct DetectorParameters {
   void forEachParameter(F&& f) const {
     const_cast<DetectorParameters*>(this)->forEachParameter(f);
   }
+  /** \brief Calls `f(key, member, description)` for every constant of the stages' rules: values
+   * measured once and fixed (the stage structs say why), members but not keys. A config line
+   * that sets one to its value is ignored with a warning, to any other value is an error. */
+  template <typename F>
+  void forEachConstant(F&& f);
+  template <typename F>
+  void forEachConstant(F&& f) const {
+    const_cast<DetectorParameters*>(this)->forEachConstant(f);
+  }
 
   /** \brief Sets `key` (`stage.member`; '-' for '_' also works; a legacy flat key is mapped)
    * from text; throws InputError("where: ...") for an unknown key or an invalid value. */
@@ -69,7 +78,7 @@ struct DetectorParameters {
   void readConfig(const std::string& path);
   /** \brief Checks ranges (positive sizes etc.); throws InputError naming the key. */
   void validate() const;
-  /** \brief All keys, for the tool's argument checking. */
+  /** \brief All keys (settings, not constants), for the tool's argument checking. */
   std::vector<std::string> keys() const;
   /** \brief `key = value` lines (a config file the tool can read back). */
   std::string toConfig() const;
@@ -91,6 +100,13 @@ void forEachStageParameter(const char* prefix, Stage& stage, F& f) {
     f(std::string(prefix) + "." + key, member, doc);
   });
 }
+/** \brief Calls `f("prefix.key", member, doc)` for every constant of one stage's struct. */
+template <typename Stage, typename F>
+void forEachStageConstant(const char* prefix, Stage& stage, F& f) {
+  stage.forEachConstant([&](const char* key, auto& member, const char* doc) {
+    f(std::string(prefix) + "." + key, member, doc);
+  });
+}
 }  // namespace detail
 
 template <typename F>
@@ -104,6 +120,16 @@ void DetectorParameters::forEachParameter(F&& f) {
   detail::forEachStageParameter("track", track, f);
   detail::forEachStageParameter("decision", decision, f);
   detail::forEachStageParameter("free_space", free_space, f);
+}
+
+template <typename F>
+void DetectorParameters::forEachConstant(F&& f) {
+  detail::forEachStageConstant("ground", ground, f);
+  detail::forEachStageConstant("segment", segment, f);
+  detail::forEachStageConstant("registration", registration, f);
+  detail::forEachStageConstant("track", track, f);
+  detail::forEachStageConstant("decision", decision, f);
+  detail::forEachStageConstant("free_space", free_space, f);
 }
 
 inline const std::vector<std::pair<std::string, std::string>>& DetectorParameters::legacyKeys() {
@@ -211,6 +237,21 @@ inline void DetectorParameters::set(const std::string& key, const std::string& v
       detail::parseValue(detail::trim(value), member, key, where);
       found = true;
     }
+  });
+  if (found) return;
+  // A constant (a key of earlier versions): its own value is harmless, any other is not what
+  // this version runs with.
+  forEachConstant([&](const std::string& k, const auto& member, const char*) {
+    if (canonical != k) return;
+    found = true;
+    auto given = member;
+    detail::parseValue(detail::trim(value), given, key, where);
+    const std::string fixed = detail::formatValue(member);
+    if (detail::formatValue(given) != fixed)
+      throw InputError(where + ": '" + key + "' is no longer a setting: its rule uses " + fixed +
+                       " (docs/design.md, Settings)");
+    PCL_WARN("%s: '%s' is no longer a setting (fixed at %s); ignored\n", where.c_str(), key.c_str(),
+             fixed.c_str());
   });
   if (!found) throw InputError(where + ": unknown parameter '" + key + "'");
 }
@@ -329,16 +370,23 @@ inline std::string DetectorParameters::toConfig() const {
   forEachParameter([&](const std::string& key, const auto& v, const char* doc) {
     out += key + " = " + detail::formatValue(v) + "  # " + doc + "\n";
   });
+  out += "\n# Constants of the rules: fixed, not settings (docs/design.md, Settings).\n";
+  forEachConstant([&](const std::string& key, const auto& v, const char* doc) {
+    out += "# " + key + " = " + detail::formatValue(v) + "  # " + doc + "\n";
+  });
   return out;
 }
 
 inline std::string DetectorParameters::toJson() const {
   std::string out = "{";
   bool first = true;
-  forEachParameter([&](const std::string& key, const auto& v, const char*) {
+  const auto add = [&](const std::string& key, const auto& v, const char*) {
     out += std::string(first ? "" : ", ") + "\"" + key + "\": " + detail::jsonValue(v);
     first = false;
-  });
+  };
+  // The constants too: summary.json records every value the run used.
+  forEachParameter(add);
+  forEachConstant(add);
   return out + "}";
 }
 

@@ -63,9 +63,16 @@ struct GroundParameters {
     f("sensor_height", sensor_height, "sensor height above the ground under it [m]");
     f("distance", distance, "ground if within this of its cell's plane [m]");
     f("max_slope_deg", max_slope_deg, "steepest plane taken for ground [deg]");
-    f("sectors", sectors, "azimuth sectors of the polar cells");
     f("local_slope", local_slope, "column local-slope test on organized scans");
     f("local_slope_deg", local_slope_deg, "steepest rise to a column neighbour still ground [deg]");
+  }
+
+  /** \brief Calls `f(key, member, description)` for every constant of this stage's rules:
+   * values measured once and fixed, not settings (docs/design.md, "Settings"). They stay
+   * members so that the unit tests of a rule, and library users studying it, can vary them. */
+  template <typename F>
+  void forEachConstant(F&& f) {
+    f("sectors", sectors, "azimuth sectors of the polar cells");
     f("range_noise", range_noise, "height noise forgiven by the local-slope test [m]");
     f("slope_band", slope_band,
       "column neighbours further than this from their plane are ignored "

@@ -58,8 +58,15 @@ struct SegmentationParameters {
     f("depth_ratio", depth_ratio, "region growing depth threshold d_T / range");
     f("depth_min", depth_min, "lower bound of d_T [m]");
     f("max_gap", max_gap, "empty range-image cells bridged by region growing");
-    f("row_bridge", row_bridge, "gap bridged along a row past empty and nearer cells [m], 0 = off");
     f("min_cluster_points", min_cluster_points, "clusters with fewer points are ignored");
+  }
+
+  /** \brief Calls `f(key, member, description)` for every constant of this stage's rules:
+   * values measured once and fixed, not settings (docs/design.md, "Settings"). They stay
+   * members so that the unit tests of a rule, and library users studying it, can vary them. */
+  template <typename F>
+  void forEachConstant(F&& f) {
+    f("row_bridge", row_bridge, "gap bridged along a row past empty and nearer cells [m], 0 = off");
   }
 };
 

@@ -62,20 +62,27 @@ struct RegistrationParameters {
   template <typename F>
   void forEachParameter(F&& f) {
     f("resolution", resolution, "density grid cell size in x/y [m]");
+    f("turn_yaw_samples", turn_yaw_samples,
+      "yaw layers of a mover's second registration when the first fails (1 = off)");
+    f("min_similarity", min_similarity, "min Bhattacharyya similarity of an update");
+    f("model_half_life", model_half_life, "half-life of the accumulated model [frames]");
+  }
+
+  /** \brief Calls `f(key, member, description)` for every constant of this stage's rules:
+   * values measured once and fixed, not settings (docs/design.md, "Settings"). They stay
+   * members so that the unit tests of a rule, and library users studying it, can vary them. */
+  template <typename F>
+  void forEachConstant(F&& f) {
     f("resolution_z", resolution_z, "density grid cell size in z [m]");
     f("cells_xy", cells_xy, "density grid cells in x and y");
     f("cells_z", cells_z, "density grid cells in z");
     f("sigma_per_metre", sigma_per_metre, "Gaussian sigma per metre of range");
     f("min_sigma", min_sigma, "lower bound of the Gaussian sigma [m]");
     f("yaw_samples", yaw_samples, "yaw layers of the registration (1 = translation only)");
-    f("turn_yaw_samples", turn_yaw_samples,
-      "yaw layers of a mover's second registration when the first fails (1 = off)");
     f("turn_yaw_step_deg", turn_yaw_step_deg, "step between those yaw layers [deg]");
     f("turn_min_gain", turn_min_gain, "B gain a turned match needs over the unturned one");
-    f("min_similarity", min_similarity, "min Bhattacharyya similarity of an update");
     f("max_points", max_points, "subsample clusters to this many points");
     f("young_search_radius", young_search_radius, "search radius for tracks seen once [m]");
-    f("model_half_life", model_half_life, "half-life of the accumulated model [frames]");
     f("stop_similarity", stop_similarity,
       "skip farther candidates of a track after a registration this good");
   }
@@ -206,14 +213,32 @@ struct TrackParameters {
     f("max_range", max_range, "clusters further than this are ignored [m]");
     f("mode", mode, "association: registration or centroid");
     f("acceleration_noise", acceleration_noise, "Kalman white-noise acceleration sigma [m/s^2]");
+    f("sigma_from_scatter", sigma_from_scatter,
+      "1 = reported velocity from a filter with sigma from the track's scatter");
+    f("gate_sigmas", gate_sigmas, "gate: Mahalanobis bound");
+    f("max_missed_frames", max_missed_frames, "frames a track coasts before deletion");
+    f("velocity_fit_init", velocity_fit_init,
+      "1 = restart the Kalman filter from a line fit at the 3rd registered update");
+    f("hold_confirmed", hold_confirmed, "1 = confirmed movers keep low-B clusters (no update)");
+    f("occluded_fraction", occluded_fraction,
+      "min fraction of a cluster side's boundary next to a nearer object to call it occluded  (0 = "
+      "off)");
+    f("split_merged", split_merged, "1 = split clusters claimed by tracks that move differently");
+    f("reacquire_velocity", reacquire_velocity,
+      "1 = a track born where a coasting mover is predicted starts with its velocity");
+  }
+
+  /** \brief Calls `f(key, member, description)` for every constant of this stage's rules:
+   * values measured once and fixed, not settings (docs/design.md, "Settings"). They stay
+   * members so that the unit tests of a rule, and library users studying it, can vary them. */
+  template <typename F>
+  void forEachConstant(F&& f) {
     f("acceleration_limit", acceleration_limit,
       "updates implying more acceleration are rejected [m/s^2]");
     f("registration_sigma", registration_sigma, "sigma of a registered position [m]");
     f("centroid_sigma", centroid_sigma, "sigma of a centroid position [m]");
     f("measurement_sigma_per_metre", measurement_sigma_per_metre,
       "position sigma per metre of range");
-    f("sigma_from_scatter", sigma_from_scatter,
-      "1 = reported velocity from a filter with sigma from the track's scatter");
     f("manoeuvre_window", manoeuvre_window, "registered positions of the manoeuvre test");
     f("manoeuvre_sigmas", manoeuvre_sigmas, "manoeuvre: acceleration significance [sigma]");
     f("static_refresh_frames", static_refresh_frames,
@@ -222,26 +247,15 @@ struct TrackParameters {
     f("static_clearance", static_clearance,
       "other clusters this close make a still static track register [m]");
     f("initial_velocity_sigma", initial_velocity_sigma, "velocity sigma of a new track [m/s]");
-    f("gate_sigmas", gate_sigmas, "gate: Mahalanobis bound");
     f("gate_margin", gate_margin, "gate: extra radius for centroid shifts [m]");
     f("max_gate_radius", max_gate_radius, "gate: largest radius [m]");
-    f("max_missed_frames", max_missed_frames, "frames a track coasts before deletion");
     f("max_tracks", max_tracks, "cap on live tracks");
-    f("velocity_fit_init", velocity_fit_init,
-      "1 = restart the Kalman filter from a line fit at the 3rd registered update");
-    f("hold_confirmed", hold_confirmed, "1 = confirmed movers keep low-B clusters (no update)");
-    f("occluded_fraction", occluded_fraction,
-      "min fraction of a cluster side's boundary next to a nearer object to call it occluded  (0 = "
-      "off)");
     f("occluded_skip", occluded_skip,
       "occluded registered updates in a row the reported velocity coasts through");
-    f("split_merged", split_merged, "1 = split clusters claimed by tracks that move differently");
     f("split_claim_distance", split_claim_distance,
       "max distance of a claimed point from the track's predicted view [m]");
     f("split_min_speed_difference", split_min_speed_difference,
       "min velocity difference of tracks whose shared cluster is split [m/s]");
-    f("reacquire_velocity", reacquire_velocity,
-      "1 = a track born where a coasting mover is predicted starts with its velocity");
     f("reacquire_velocity_sigma", reacquire_velocity_sigma,
       "velocity sigma of such a re-acquired track [m/s]");
   }
@@ -331,30 +345,37 @@ struct DecisionParameters {
   /** \brief Calls `f(key, member, description)` for every setting. */
   template <typename F>
   void forEachParameter(F&& f) {
-    f("max_length", max_length, "longer clusters are static, tracked by centroid [m]");
-    f("max_height", max_height, "taller clusters are static, tracked by centroid [m]");
     f("min_height", min_height, "lower clusters are never movers [m]");
     f("speed", speed, "speed threshold of a mover [m/s]");
     f("speed_sigmas", speed_sigmas, "fast only if speed > this * its sigma");
-    f("fast_from_fit", fast_from_fit,
-      "1 = speed votes from a line fit of the measured positions, 0 = Kalman velocity");
     f("slow_window", slow_window, "window of the sustained-slow-motion test [s] (0 = off)");
-    f("slow_speed", slow_speed, "min speed of sustained slow motion [m/s]");
     f("window", window, "mover decision window N [updates]");
     f("votes", votes, "fast updates M of the last N needed");
     f("min_age", min_age, "min updates of a mover track K");
     f("displacement_ratio", displacement_ratio, "min net displacement / (mover_speed * time)");
     f("confirm_false_rate", confirm_false_rate,
       "early confirmation: F-test false-positive rate of velocity = 0 (0 = off)");
+    f("latch", latch, "1 = a confirmed mover stays a mover while tracked");
+    f("standing_height", standing_height,
+      "1 = a view's height is measured from the ground under it or a nearer object hiding its "
+      "lower part");
+  }
+
+  /** \brief Calls `f(key, member, description)` for every constant of this stage's rules:
+   * values measured once and fixed, not settings (docs/design.md, "Settings"). They stay
+   * members so that the unit tests of a rule, and library users studying it, can vary them. */
+  template <typename F>
+  void forEachConstant(F&& f) {
+    f("max_length", max_length, "longer clusters are static, tracked by centroid [m]");
+    f("max_height", max_height, "taller clusters are static, tracked by centroid [m]");
+    f("fast_from_fit", fast_from_fit,
+      "1 = speed votes from a line fit of the measured positions, 0 = Kalman velocity");
+    f("slow_speed", slow_speed, "min speed of sustained slow motion [m/s]");
     f("confirm_sigma_floor", confirm_sigma_floor, "early confirmation: min position sigma [m]");
     f("confirm_min_similarity", confirm_min_similarity, "early confirmation: min B of the update");
     f("confirm_min_points", confirm_min_points, "early confirmation: min points of the cluster");
     f("confirm_free_space_votes", confirm_free_space_votes,
       "early confirmation: passed free-space tests needed");
-    f("latch", latch, "1 = a confirmed mover stays a mover while tracked");
-    f("standing_height", standing_height,
-      "1 = a view's height is measured from the ground under it or a nearer object hiding its "
-      "lower part");
   }
 };
 
@@ -420,15 +441,22 @@ struct FreeSpaceParameters {
     f("lag", lag, "free-space test against the scan this many frames ago (0 = off)");
     f("long_lag", long_lag,
       "longer lag tried when the free_space_lag test fails [frames] (0 = off)");
+    f("no_return", no_return,
+      "1 = no return below the sensor in an earlier scan = seen empty up to max_range");
+    f("split", split, "1 = split a cluster's seen-through part from its static rest");
+  }
+
+  /** \brief Calls `f(key, member, description)` for every constant of this stage's rules:
+   * values measured once and fixed, not settings (docs/design.md, "Settings"). They stay
+   * members so that the unit tests of a rule, and library users studying it, can vary them. */
+  template <typename F>
+  void forEachConstant(F&& f) {
     f("long_min_fraction", long_min_fraction, "min fraction seen through at free_space_long_lag");
     f("min_fraction", min_fraction, "min fraction of points seen through");
     f("min_points", min_points, "min number of points seen through");
     f("votes", votes, "passed free-space tests needed to confirm");
     f("margin", margin, "seen-through range margin [m]");
     f("margin_per_metre", margin_per_metre, "margin per metre of distance");
-    f("no_return", no_return,
-      "1 = no return below the sensor in an earlier scan = seen empty up to max_range");
-    f("split", split, "1 = split a cluster's seen-through part from its static rest");
   }
 };
 
