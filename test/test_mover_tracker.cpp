@@ -1240,6 +1240,63 @@ TEST(MoverTracker, ConfirmedWalkerHoldsItsHeadAndShouldersSeenAboveAParkedCar) {
   }
 }
 
+// Hidden for longer than a track coasts (15 frames against max_missed_frames = 5): the track
+// that held the head-and-shoulders clusters along its path restarts its model from them instead
+// of dying and leaving them to a new track that would have to be decided again.
+TEST(MoverTracker, WalkerHiddenBehindAParkedCarForLongerThanATrackCoastsKeepsItsTrack) {
+  Tracker tracker;
+  tracker.setParameters(defaults());
+  ASSERT_LT(defaults().track.max_missed_frames, 15);
+  const Eigen::Vector3d sensor(0, 0, 1.7);
+  const double speed = 1.5;
+  int walker_id = -1;
+  for (int k = 0; k < 30; ++k) {
+    const double t = 0.1 * k;
+    SceneBuilder scene;
+    scene.addBox(sensor, Eigen::Vector2d(15, -4 + speed * t), 0.0, 0.5, 0.6, 1.8);
+    const bool hidden = k >= 15;
+    if (hidden) keepAbove(scene, 0, 1.5f);
+    const auto results = step(tracker, scene, sensor, t);
+    ASSERT_EQ(results.size(), 1u);
+    if (k == 14) ASSERT_TRUE(results[0].mover) << "the walker was not confirmed in 1.4 s";
+    if (k <= 14) {
+      walker_id = results[0].track_id;
+      continue;
+    }
+    EXPECT_EQ(results[0].track_id, walker_id) << "frame " << k;
+    EXPECT_TRUE(results[0].mover) << "frame " << k;
+  }
+}
+
+// What a mover held while it coasted must have moved with it: a low planter (too low to register
+// against the walker's model) that comes into view where a walker vanished is held as the walker
+// for max_missed_frames, but it stood still while the walker's track moved on, so the track ends
+// and the planter is tracked as what it is, not a mover.
+TEST(MoverTracker, StaticObjectHeldByAVanishedWalkerDoesNotTakeOverItsTrack) {
+  Tracker tracker;
+  tracker.setParameters(defaults());
+  const Eigen::Vector3d sensor(0, 0, 1.7);
+  const double speed = 1.5;
+  int walker_id = -1;
+  const Eigen::Vector2d planter(15, -4 + speed * 1.4);
+  for (int k = 0; k < 26; ++k) {
+    const double t = 0.1 * k;
+    SceneBuilder scene;
+    if (k <= 14)
+      scene.addBox(sensor, Eigen::Vector2d(15, -4 + speed * t), 0.0, 0.5, 0.6, 1.8);
+    else
+      scene.addBox(sensor, planter, 0.0, 0.8, 0.8, 0.35);
+    const auto results = step(tracker, scene, sensor, t);
+    ASSERT_EQ(results.size(), 1u);
+    if (k == 14) ASSERT_TRUE(results[0].mover) << "the walker was not confirmed in 1.4 s";
+    if (k <= 14) walker_id = results[0].track_id;
+    if (k >= 15 + defaults().track.max_missed_frames + 1) {
+      EXPECT_NE(results[0].track_id, walker_id) << "frame " << k;
+      EXPECT_FALSE(results[0].mover) << "frame " << k;
+    }
+  }
+}
+
 // A walker seen only above a parked car: its 0.3 m head-and-shoulders cluster is under
 // min_mover_height, but the car hides its lower part (the detector passes the car's lowest point
 // as the cluster's floor), so it is measured down to there and becomes a mover. Without the floor,

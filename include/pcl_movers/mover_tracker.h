@@ -76,8 +76,11 @@ inline const char* moverReasonName(MoverReason reason) {
  *  4. pairs are assigned greedily, best score first, one cluster per track and one track per
  *     cluster; the Kalman filter is updated with the measured position; the registered view is
  *     accumulated into the model with a half-life of `model_half_life` frames;
- *  5. unmatched tracks coast (prediction only) and are deleted after `max_missed_frames`;
- *     unmatched clusters start new tracks (at most `max_tracks` live tracks);
+ *  5. unmatched tracks coast (prediction only) and are deleted after `max_missed_frames`; a
+ *     confirmed mover holds a cluster near its prediction that failed to register, and after
+ *     `max_missed_frames` such frames restarts its model from it when the held clusters moved
+ *     along its path (reanchorTrack()); unmatched clusters start new tracks (at most
+ *     `max_tracks` live tracks);
  *  6. mover decision: speed > `mover_speed` (and > `mover_speed_sigmas` times its own standard
  *     deviation, so young or far tracks with vague velocities wait) in `mover_votes` of the last
  *     `mover_window` updates,
@@ -160,6 +163,9 @@ class MoverTracker {
     /// velocity follows the centroids of the partial views until the track gets its model.
     Eigen::Vector2d inherited_velocity = Eigen::Vector2d::Zero();
     int occluded_run = 0;  ///< consecutive registered updates of occluded views
+    /// Centroid (x, y) and time of the first cluster held since the last update (holdClusters);
+    /// time NaN while no cluster is held.
+    Eigen::Vector3d held_from = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
     /// Yaw [rad] that turns the track's current views onto its model (turn_yaw_samples).
     double model_yaw = 0;
     /// Consecutive occluded updates the velocity filter skipped (occluded_skip).
@@ -445,8 +451,16 @@ class MoverTracker {
   void decideAndRemember(Track& track, const Match& m, const Frame& frame,
                          std::vector<Candidate>& candidates);
   /** \brief Confirmed movers that got no update keep a cluster nobody took near them. */
-  void holdClusters(const Association& association, const std::vector<Candidate>& candidates,
-                    std::vector<char>& track_used, std::vector<char>& cluster_used);
+  void holdClusters(const Frame& frame, const Association& association,
+                    std::vector<Candidate>& candidates, std::vector<char>& track_used,
+                    std::vector<char>& cluster_used);
+  /** \brief A track that held clusters for max_missed_frames restarts its model from the held
+   * one (cluster `c`), its positions moved onto that view's centroid. */
+  void reanchorTrack(Track& track, const Frame& frame, std::vector<Candidate>& candidates,
+                     std::size_t c);
+  /** \brief Whether the clusters `track` held since Track::held_from moved with its velocity
+   * (within track.gate_margin): the held object is the one it follows. */
+  bool heldAlongItsPath(const Track& track, const Eigen::Vector2d& centroid, double time) const;
   /** \brief Coasting tracks missed too long (or seen once and then missed) are deleted. */
   void dropLostTracks(const std::vector<char>& track_used);
   /** \brief A new track for every usable cluster no track took. */

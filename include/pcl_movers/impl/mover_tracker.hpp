@@ -903,7 +903,8 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
     else
       updateTrack(m, frame, candidates);
   }
-  if (p.track.hold_confirmed) holdClusters(association, candidates, track_used, cluster_used);
+  if (p.track.hold_confirmed)
+    holdClusters(frame, association, candidates, track_used, cluster_used);
   dropLostTracks(track_used);
   bearTracks(frame, candidates, cluster_used);
 }
@@ -1246,6 +1247,7 @@ void MoverTracker<PointT>::updateTrack(const Match& m, const Frame& frame,
     t.past_views.clear();
   }
   t.missed = 0;
+  t.held_from.setConstant(std::numeric_limits<double>::quiet_NaN());
   t.similarity = m.similarity;
   t.features = cand.features;
   t.centroid_offset = (cand.features.centroid - m.measurement).template head<2>();
@@ -1416,8 +1418,8 @@ void MoverTracker<PointT>::report(const Track& t, double similarity, ClusterResu
 }
 
 template <typename PointT>
-void MoverTracker<PointT>::holdClusters(const Association& association,
-                                        const std::vector<Candidate>& candidates,
+void MoverTracker<PointT>::holdClusters(const Frame& frame, const Association& association,
+                                        std::vector<Candidate>& candidates,
                                         std::vector<char>& track_used,
                                         std::vector<char>& cluster_used) {
   const auto& p = parameters_;
@@ -1431,14 +1433,67 @@ void MoverTracker<PointT>::holdClusters(const Association& association,
       const int c = association.held_cluster[ti];
       if (track_used[ti] || c < 0 || cluster_used[c]) continue;
       Track& t = tracks_[ti];
-      if (t.missed + 1 > p.track.max_missed_frames) continue;  // dies now: let the cluster be born
+      if (t.missed + 1 > p.track.max_missed_frames && !(frame.use_registration && t.model))
+        continue;  // dies now: let the cluster be born
+      const Eigen::Vector2d centroid = candidates[c].features.centroid.template head<2>();
+      if (!std::isfinite(t.held_from.z())) t.held_from << centroid, frame.time;
+      if (t.missed + 1 > p.track.max_missed_frames && !heldAlongItsPath(t, centroid, frame.time))
+        continue;  // dies now: let the cluster be born
       track_used[ti] = 1;
       cluster_used[c] = 1;
-      ++t.missed;  // still coasting: deleted after max_missed_frames without a real update
+      if (t.missed + 1 > p.track.max_missed_frames)
+        reanchorTrack(t, frame, candidates, c);
+      else
+        ++t.missed;  // still coasting
       t.features = candidates[c].features;
       report(t, 0, results_[c]);
     }
   }
+}
+
+template <typename PointT>
+void MoverTracker<PointT>::reanchorTrack(Track& t, const Frame& frame,
+                                         std::vector<Candidate>& candidates, std::size_t c) {
+  // The object now looks unlike its model (a truck far behind seen by one beam, a car turning
+  // or half hidden), so no view registered for max_missed_frames while it held clusters at its
+  // prediction. A new track there would start the decision over ("new", "young", votes); the
+  // same object keeps its track: its model restarts from the held view and its reference point
+  // moves to that view's centroid, and the positions it remembers move with it, so its line
+  // stays the line it was.
+  Candidate& cand = candidates[c];
+  ensurePoints(frame.cloud, frame.clusters[c], cand);
+  const Eigen::Vector2d shift = cand.features.centroid.template head<2>() - t.filter.position();
+  const auto moveBy = [&](KalmanFilterCV& filter) {
+    if (!filter.isInitialized()) return;
+    KalmanFilterCV::State state = filter.getState();
+    state.template head<2>() += shift;
+    filter.setState(state);
+  };
+  moveBy(t.filter);
+  moveBy(t.velocity_filter);
+  for (auto* positions : {&t.history, &t.long_history, &t.unoccluded_positions})
+    for (auto& q : *positions) q.template head<2>() += shift;
+  t.model = makeModel(cand, frame.sensor_origin);
+  t.model_yaw = 0;
+  t.centroid_offset.setZero();
+  t.missed = 0;
+  t.past_points.clear();
+  t.past_views.clear();
+  t.held_from.setConstant(std::numeric_limits<double>::quiet_NaN());
+}
+
+template <typename PointT>
+bool MoverTracker<PointT>::heldAlongItsPath(const Track& t, const Eigen::Vector2d& centroid,
+                                            double time) const {
+  // The clusters a track held moved as the track did, within the shift of a changing view, and
+  // more like it than like a static object: a static neighbour held by a passing mover stays
+  // behind its prediction by the distance the mover covers (a walker's 0.75 m in 0.5 s is within
+  // the margin, but nearer standing still than walking).
+  const double since = time - t.held_from.z();
+  if (!(since > 0)) return false;
+  const Eigen::Vector2d moved = centroid - t.held_from.template head<2>();
+  const double off_path = (moved - t.filter.velocity() * since).norm();
+  return off_path <= parameters_.track.gate_margin && off_path < moved.norm();
 }
 
 template <typename PointT>
