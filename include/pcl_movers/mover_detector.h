@@ -204,6 +204,28 @@ class MoverDetector {
   /** \brief Organizes `scan` into a range image (copy when it is already organized). */
   PointCloudConstPtr organize(const PointCloudConstPtr& scan);
 
+  /** \brief Adds the scan to the free-space map and hands the map to the tracker; false (and no
+   * map) when the free-space test is off. */
+  bool addToFreeSpaceMap(const PointCloud& organized, const Eigen::Isometry3d& pose);
+  /** \brief What the tracker needs besides the points: each cluster's occluded sides
+   * (occluded_) and what it stands on (floor_z_). */
+  void describeClusters(const PointCloud& organized, const pcl::Indices& objects,
+                        const std::vector<pcl::PointIndices>& clusters,
+                        const Eigen::Isometry3d& pose, const PointCloud& world,
+                        const std::vector<pcl::PointIndices>& world_clusters);
+  /** \brief Splits the clusters that hold two tracks moving differently
+   * (MoverTracker::splitMergedClusters()), both cluster lists and the per-cluster data alike. */
+  void splitMergedClusters(const PointCloud& world, double time,
+                           std::vector<pcl::PointIndices>& clusters,
+                           std::vector<pcl::PointIndices>& world_clusters);
+  /** \brief The frame's labels, track ids and rows from the tracker's cluster results. */
+  void writeOutputs(const PointCloud& organized, const pcl::Indices& objects,
+                    const std::vector<pcl::PointIndices>& clusters, const Eigen::Isometry3d& pose,
+                    FrameResult& result) const;
+  /** \brief The tracks.csv row of one tracked cluster. */
+  io::TrackRow trackRow(const typename MoverTracker<PointT>::ClusterResult& cluster,
+                        const Eigen::Isometry3d& pose, int frame, double time) const;
+
   /** \brief A stage object kept between frames so that its work buffers (and the organizer's
    * lookup tables) are reused instead of reallocated every frame. Created on first use; a copy of
    * the detector starts without one, so two detectors never share buffers. */

@@ -261,7 +261,6 @@ void MoverDetector<PointT>::process(const PointCloudConstPtr& scan,
   auto ms = [](Clock::time_point a, Clock::time_point b) {
     return std::chrono::duration<double, std::milli>(b - a).count();
   };
-  const auto& p = parameters_;
   // Every float quantity below is relative to the origin (UTM-sized poses lose their centimetres
   // in single precision); world outputs get it back in double.
   const Eigen::Isometry3d pose = localPose(world_pose);
@@ -276,18 +275,14 @@ void MoverDetector<PointT>::process(const PointCloudConstPtr& scan,
     return;
   }
 
-  // Organize.
   const auto t0 = Clock::now();
   const PointCloudConstPtr organized = organize(scan);
   result.organized = organized;
   if (organized != scan) result.input_indices = input_indices_;
-  const std::size_t n = organized->size();
 
-  // Ground removal: indices of the non-ground points.
   const auto t1 = Clock::now();
-  const pcl::IndicesPtr objects = removeGround(organized);
+  const pcl::IndicesPtr objects = removeGround(organized);  // the non-ground points
 
-  // Segmentation of the non-ground points on the range image.
   const auto t2 = Clock::now();
   std::vector<pcl::PointIndices> clusters = segmentObjects(organized, objects);
   result.clusters = static_cast<int>(clusters.size());
@@ -301,28 +296,57 @@ void MoverDetector<PointT>::process(const PointCloudConstPtr& scan,
   // Tracking; the free-space map needs the current scan first (receding-object test).
   const auto t4 = Clock::now();
   auto split_start = t4, split_end = t4;  // motion-aware segmentation, timed on its own
-  // (Re)bound every frame: a copied detector must not point into the original's map.
-  if (p.free_space.lag > 0) {
-    free_space_.setHistory(std::max(p.free_space.lag, p.free_space.long_lag) + 1);
-    free_space_.setMargin(p.free_space.margin, p.free_space.margin_per_metre);
-    free_space_.setNoReturnRange(p.free_space.no_return ? p.track.max_range : 0.0);
-    free_space_.setSensorHeight(p.ground.sensor_height);
-    free_space_.setPoolOnAdd(p.free_space.split);  // the split judges every cluster
-    free_space_.addScan(*organized, pose);
-    tracker_.setFreeSpaceMap(&free_space_);
+  if (addToFreeSpaceMap(*organized, pose)) {
     split_start = Clock::now();
-    if (p.free_space.split) splitMovingParts(*organized, pose, clusters, *world, world_clusters);
+    if (parameters_.free_space.split)
+      splitMovingParts(*organized, pose, clusters, *world, world_clusters);
     split_end = Clock::now();
-  } else {
-    tracker_.setFreeSpaceMap(nullptr);
   }
+  describeClusters(*organized, *objects, clusters, pose, *world, world_clusters);
+  splitMergedClusters(*world, time, clusters, world_clusters);
+  tracker_.update(world, world_clusters, pose.translation(), time, occluded_, floor_z_);
+  const auto t5 = Clock::now();
+
+  writeOutputs(*organized, *objects, clusters, pose, result);
+  const double split_ms = ms(split_start, split_end);
+  timings_ = {{"organize", ms(t0, t1)},  {"ground", ms(t1, t2)}, {"segment", ms(t2, t3)},
+              {"transform", ms(t3, t4)}, {"split", split_ms},    {"track", ms(t4, t5) - split_ms},
+              {"total", ms(t0, t5)}};
+}
+
+template <typename PointT>
+bool MoverDetector<PointT>::addToFreeSpaceMap(const PointCloud& organized,
+                                              const Eigen::Isometry3d& pose) {
+  const auto& p = parameters_;
+  // (Re)bound every frame: a copied detector must not point into the original's map.
+  if (!(p.free_space.lag > 0)) {
+    tracker_.setFreeSpaceMap(nullptr);
+    return false;
+  }
+  free_space_.setHistory(std::max(p.free_space.lag, p.free_space.long_lag) + 1);
+  free_space_.setMargin(p.free_space.margin, p.free_space.margin_per_metre);
+  free_space_.setNoReturnRange(p.free_space.no_return ? p.track.max_range : 0.0);
+  free_space_.setSensorHeight(p.ground.sensor_height);
+  free_space_.setPoolOnAdd(p.free_space.split);  // the split judges every cluster
+  free_space_.addScan(organized, pose);
+  tracker_.setFreeSpaceMap(&free_space_);
+  return true;
+}
+
+template <typename PointT>
+void MoverDetector<PointT>::describeClusters(const PointCloud& organized,
+                                             const pcl::Indices& objects,
+                                             const std::vector<pcl::PointIndices>& clusters,
+                                             const Eigen::Isometry3d& pose, const PointCloud& world,
+                                             const std::vector<pcl::PointIndices>& world_clusters) {
+  const auto& p = parameters_;
   // One labelling of the range image's cells serves both occlusion tests below.
   if (p.track.occluded_fraction > 0 || p.decision.standing_height)
-    RangeImageRegionGrowing<PointT>::cellLabels(*organized, *objects, clusters, cell_labels_);
+    RangeImageRegionGrowing<PointT>::cellLabels(organized, objects, clusters, cell_labels_);
   // Occluded cluster sides (range image, sensor frame): measurements there can slide.
   if (p.track.occluded_fraction > 0)
     RangeImageRegionGrowing<PointT>::occludedSides(
-        *organized, cell_labels_, clusters, static_cast<float>(p.segment.depth_ratio),
+        organized, cell_labels_, clusters, static_cast<float>(p.segment.depth_ratio),
         static_cast<float>(p.segment.depth_min), p.segment.max_gap, true,
         static_cast<float>(p.track.occluded_fraction), occluded_);
   else
@@ -330,48 +354,51 @@ void MoverDetector<PointT>::process(const PointCloudConstPtr& scan,
   // What each cluster stands on, as a world z (the mover height test, standingHeight()): the
   // lowest point of a nearer object hiding it from below, else the ground under it.
   floor_z_.clear();
-  if (p.decision.standing_height) {
-    RangeImageRegionGrowing<PointT>::occluderFloors(
-        *organized, cell_labels_, clusters, static_cast<float>(p.segment.depth_ratio),
-        static_cast<float>(p.segment.depth_min), p.segment.max_gap, 0.5f, floors_);
-    floor_z_.assign(clusters.size(), std::numeric_limits<double>::quiet_NaN());
-    for (std::size_t c = 0; c < clusters.size(); ++c)
-      if (floors_[c] >= 0)
-        floor_z_[c] =
-            (pose * (*organized)[floors_[c]].getVector3fMap().template cast<double>()).z();
-    groundFloors(*world, clusters, world_clusters);
-  }
-  // Clusters holding objects of two tracks that move differently are split between them; the
-  // sensor-frame clusters (outputs) and occlusion flags follow the same split.
-  const auto parts = tracker_.splitMergedClusters(*world, world_clusters, time);
-  if (!parts.empty()) {
-    // A split part's side along the cut is not the object's extent: occluded (kSplitPart, see
-    // MoverTracker::update()).
-    occluded_ = MoverTracker<PointT>::partFlags(parts, clusters, occluded_);
-    if (!floor_z_.empty()) {
-      std::vector<double> part_floor(parts.size());
-      for (std::size_t k = 0; k < parts.size(); ++k)
-        part_floor[k] = floor_z_[static_cast<std::size_t>(parts[k].cluster)];
-      floor_z_.swap(part_floor);
-    }
-    world_clusters = MoverTracker<PointT>::applyParts(parts, world_clusters);
-    clusters = MoverTracker<PointT>::applyParts(parts, clusters);
-  }
-  tracker_.update(world, world_clusters, pose.translation(), time, occluded_, floor_z_);
-  const auto t5 = Clock::now();
+  if (!p.decision.standing_height) return;
+  RangeImageRegionGrowing<PointT>::occluderFloors(
+      organized, cell_labels_, clusters, static_cast<float>(p.segment.depth_ratio),
+      static_cast<float>(p.segment.depth_min), p.segment.max_gap, 0.5f, floors_);
+  floor_z_.assign(clusters.size(), std::numeric_limits<double>::quiet_NaN());
+  for (std::size_t c = 0; c < clusters.size(); ++c)
+    if (floors_[c] >= 0)
+      floor_z_[c] = (pose * organized[floors_[c]].getVector3fMap().template cast<double>()).z();
+  groundFloors(world, clusters, world_clusters);
+}
 
-  // Outputs: rows, indices and labels.
+template <typename PointT>
+void MoverDetector<PointT>::splitMergedClusters(const PointCloud& world, double time,
+                                                std::vector<pcl::PointIndices>& clusters,
+                                                std::vector<pcl::PointIndices>& world_clusters) {
+  // Clusters holding objects of two tracks that move differently are split between them; the
+  // sensor-frame clusters (outputs) and the occlusion flags and floors follow the same split.
+  const auto parts = tracker_.splitMergedClusters(world, world_clusters, time);
+  if (parts.empty()) return;
+  // A split part's side along the cut is not the object's extent: occluded (kSplitPart, see
+  // MoverTracker::update()).
+  occluded_ = MoverTracker<PointT>::partFlags(parts, clusters, occluded_);
+  if (!floor_z_.empty()) {
+    std::vector<double> part_floor(parts.size());
+    for (std::size_t k = 0; k < parts.size(); ++k)
+      part_floor[k] = floor_z_[static_cast<std::size_t>(parts[k].cluster)];
+    floor_z_.swap(part_floor);
+  }
+  world_clusters = MoverTracker<PointT>::applyParts(parts, world_clusters);
+  clusters = MoverTracker<PointT>::applyParts(parts, clusters);
+}
+
+template <typename PointT>
+void MoverDetector<PointT>::writeOutputs(const PointCloud& organized, const pcl::Indices& objects,
+                                         const std::vector<pcl::PointIndices>& clusters,
+                                         const Eigen::Isometry3d& pose, FrameResult& result) const {
+  const std::size_t n = organized.size();
   result.labels.assign(n, kUnlabelled);
   result.track_ids.assign(n, -1);
   for (std::size_t i = 0; i < n; ++i) {
-    const auto& pt = (*organized)[i];
+    const auto& pt = organized[i];
     if (std::isfinite(pt.x) && std::isfinite(pt.y) && std::isfinite(pt.z))
       result.labels[i] = kGround;
   }
-  for (const auto i : *objects) result.labels[i] = kUnlabelled;
-  const Eigen::Isometry3d world_to_sensor = pose.inverse();
-  const Eigen::Matrix3d R = pose.linear();
-  const double pose_yaw = std::atan2(R(1, 0), R(0, 0));
+  for (const auto i : objects) result.labels[i] = kUnlabelled;
   const auto& cluster_results = tracker_.getClusterResults();
   for (std::size_t c = 0; c < clusters.size(); ++c) {
     const auto& cr = cluster_results[c];
@@ -381,38 +408,41 @@ void MoverDetector<PointT>::process(const PointCloudConstPtr& scan,
       result.labels[i] = label;
       result.track_ids[i] = cr.track_id;
     }
-    io::TrackRow row;
-    row.frame = frame;
-    row.time = time;
-    row.track_id = cr.track_id;
-    row.mover = cr.mover;
-    row.reason = moverReasonName(cr.reason);
-    const Eigen::Vector3d local = world_to_sensor * cr.features.centroid;
-    row.x = local.x();
-    row.y = local.y();
-    row.z = local.z();
-    const Eigen::Vector3d world = cr.features.centroid + origin_;
-    row.wx = world.x();
-    row.wy = world.y();
-    row.wz = world.z();
-    row.vx = cr.velocity.x();
-    row.vy = cr.velocity.y();
-    row.speed = cr.velocity.norm();
-    row.length = cr.features.length;
-    row.width = cr.features.width;
-    row.height = cr.features.height;
-    // Box yaw in the sensor frame, like objects.txt.
-    row.yaw = std::remainder(cr.features.yaw - pose_yaw, M_PI);
-    row.similarity = cr.similarity;
-    row.points = cr.features.points;
-    result.rows.push_back(row);
+    result.rows.push_back(trackRow(cr, pose, result.frame, result.time));
     result.cluster_indices.push_back(clusters[c]);
   }
+}
 
-  const double split_ms = ms(split_start, split_end);
-  timings_ = {{"organize", ms(t0, t1)},  {"ground", ms(t1, t2)}, {"segment", ms(t2, t3)},
-              {"transform", ms(t3, t4)}, {"split", split_ms},    {"track", ms(t4, t5) - split_ms},
-              {"total", ms(t0, t5)}};
+template <typename PointT>
+io::TrackRow MoverDetector<PointT>::trackRow(const typename MoverTracker<PointT>::ClusterResult& cr,
+                                             const Eigen::Isometry3d& pose, int frame,
+                                             double time) const {
+  io::TrackRow row;
+  row.frame = frame;
+  row.time = time;
+  row.track_id = cr.track_id;
+  row.mover = cr.mover;
+  row.reason = moverReasonName(cr.reason);
+  const Eigen::Vector3d local = pose.inverse() * cr.features.centroid;
+  row.x = local.x();
+  row.y = local.y();
+  row.z = local.z();
+  const Eigen::Vector3d world = cr.features.centroid + origin_;
+  row.wx = world.x();
+  row.wy = world.y();
+  row.wz = world.z();
+  row.vx = cr.velocity.x();
+  row.vy = cr.velocity.y();
+  row.speed = cr.velocity.norm();
+  row.length = cr.features.length;
+  row.width = cr.features.width;
+  row.height = cr.features.height;
+  // Box yaw in the sensor frame, like objects.txt.
+  const Eigen::Matrix3d R = pose.linear();
+  row.yaw = std::remainder(cr.features.yaw - std::atan2(R(1, 0), R(0, 0)), M_PI);
+  row.similarity = cr.similarity;
+  row.points = cr.features.points;
+  return row;
 }
 
 }  // namespace pcl_movers
