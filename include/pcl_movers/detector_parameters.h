@@ -70,6 +70,10 @@ struct DetectorParameters {
     const_cast<DetectorParameters*>(this)->forEachConstant(f);
   }
 
+  /** \brief Calls `g(prefix, stage)` for every stage struct, in key order ("ground", ground). */
+  template <typename G>
+  void forEachStage(G&& g);
+
   /** \brief Sets `key` (`stage.member`; '-' for '_' also works; a legacy flat key is mapped)
    * from text; throws InputError("where: ...") for an unknown key or an invalid value. */
   void set(const std::string& key, const std::string& value, const std::string& where);
@@ -93,43 +97,40 @@ struct DetectorParameters {
 
 // --------------------------------------------------------------------------- implementation
 namespace detail {
-/** \brief Calls `f("prefix.key", member, doc)` for every setting of one stage's struct. */
-template <typename Stage, typename F>
-void forEachStageParameter(const char* prefix, Stage& stage, F& f) {
-  stage.forEachParameter([&](const char* key, auto& member, const char* doc) {
+/** \brief `f` behind the stage prefix: called as `f("prefix.key", member, doc)` by a stage's
+ * forEachParameter() or forEachConstant(), which pass `key`. */
+template <typename F>
+auto prefixed(const char* prefix, F& f) {
+  return [prefix, &f](const char* key, auto& member, const char* doc) {
     f(std::string(prefix) + "." + key, member, doc);
-  });
-}
-/** \brief Calls `f("prefix.key", member, doc)` for every constant of one stage's struct. */
-template <typename Stage, typename F>
-void forEachStageConstant(const char* prefix, Stage& stage, F& f) {
-  stage.forEachConstant([&](const char* key, auto& member, const char* doc) {
-    f(std::string(prefix) + "." + key, member, doc);
-  });
+  };
 }
 }  // namespace detail
+
+template <typename G>
+void DetectorParameters::forEachStage(G&& g) {
+  g("ground", ground);
+  g("segment", segment);
+  g("registration", registration);
+  g("track", track);
+  g("decision", decision);
+  g("free_space", free_space);
+}
 
 template <typename F>
 void DetectorParameters::forEachParameter(F&& f) {
   f(std::string("sensor"), sensor,
     "layout of unorganized scans: auto, hdl64, hdl32, vlp16, os1_64, ladar2d");
   f(std::string("deskew"), deskew, "per-point-time de-skewing with the ego motion: auto, on, off");
-  detail::forEachStageParameter("ground", ground, f);
-  detail::forEachStageParameter("segment", segment, f);
-  detail::forEachStageParameter("registration", registration, f);
-  detail::forEachStageParameter("track", track, f);
-  detail::forEachStageParameter("decision", decision, f);
-  detail::forEachStageParameter("free_space", free_space, f);
+  forEachStage([&](const char* prefix, auto& stage) {
+    stage.forEachParameter(detail::prefixed(prefix, f));
+  });
 }
 
 template <typename F>
 void DetectorParameters::forEachConstant(F&& f) {
-  detail::forEachStageConstant("ground", ground, f);
-  detail::forEachStageConstant("segment", segment, f);
-  detail::forEachStageConstant("registration", registration, f);
-  detail::forEachStageConstant("track", track, f);
-  detail::forEachStageConstant("decision", decision, f);
-  detail::forEachStageConstant("free_space", free_space, f);
+  forEachStage(
+      [&](const char* prefix, auto& stage) { stage.forEachConstant(detail::prefixed(prefix, f)); });
 }
 
 inline const std::vector<std::pair<std::string, std::string>>& DetectorParameters::legacyKeys() {

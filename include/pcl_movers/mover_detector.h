@@ -222,9 +222,11 @@ class MoverDetector {
   void writeOutputs(const PointCloud& organized, const pcl::Indices& objects,
                     const std::vector<pcl::PointIndices>& clusters, const Eigen::Isometry3d& pose,
                     FrameResult& result) const;
-  /** \brief The tracks.csv row of one tracked cluster. */
+  /** \brief The tracks.csv row of one tracked cluster; `world_to_sensor` and `pose_yaw` (the
+   * sensor's yaw in the world) are the frame's, computed once for all its rows. */
   io::TrackRow trackRow(const typename MoverTracker<PointT>::ClusterResult& cluster,
-                        const Eigen::Isometry3d& pose, int frame, double time) const;
+                        const Eigen::Isometry3d& world_to_sensor, double pose_yaw, int frame,
+                        double time) const;
 
   /** \brief A stage object kept between frames so that its work buffers (and the organizer's
    * lookup tables) are reused instead of reallocated every frame. Created on first use; a copy of

@@ -399,6 +399,9 @@ void MoverDetector<PointT>::writeOutputs(const PointCloud& organized, const pcl:
       result.labels[i] = kGround;
   }
   for (const auto i : objects) result.labels[i] = kUnlabelled;
+  const Eigen::Isometry3d world_to_sensor = pose.inverse();
+  const Eigen::Matrix3d R = pose.linear();
+  const double pose_yaw = std::atan2(R(1, 0), R(0, 0));
   const auto& cluster_results = tracker_.getClusterResults();
   for (std::size_t c = 0; c < clusters.size(); ++c) {
     const auto& cr = cluster_results[c];
@@ -408,22 +411,22 @@ void MoverDetector<PointT>::writeOutputs(const PointCloud& organized, const pcl:
       result.labels[i] = label;
       result.track_ids[i] = cr.track_id;
     }
-    result.rows.push_back(trackRow(cr, pose, result.frame, result.time));
+    result.rows.push_back(trackRow(cr, world_to_sensor, pose_yaw, result.frame, result.time));
     result.cluster_indices.push_back(clusters[c]);
   }
 }
 
 template <typename PointT>
 io::TrackRow MoverDetector<PointT>::trackRow(const typename MoverTracker<PointT>::ClusterResult& cr,
-                                             const Eigen::Isometry3d& pose, int frame,
-                                             double time) const {
+                                             const Eigen::Isometry3d& world_to_sensor,
+                                             double pose_yaw, int frame, double time) const {
   io::TrackRow row;
   row.frame = frame;
   row.time = time;
   row.track_id = cr.track_id;
   row.mover = cr.mover;
   row.reason = moverReasonName(cr.reason);
-  const Eigen::Vector3d local = pose.inverse() * cr.features.centroid;
+  const Eigen::Vector3d local = world_to_sensor * cr.features.centroid;
   row.x = local.x();
   row.y = local.y();
   row.z = local.z();
@@ -438,8 +441,7 @@ io::TrackRow MoverDetector<PointT>::trackRow(const typename MoverTracker<PointT>
   row.width = cr.features.width;
   row.height = cr.features.height;
   // Box yaw in the sensor frame, like objects.txt.
-  const Eigen::Matrix3d R = pose.linear();
-  row.yaw = std::remainder(cr.features.yaw - std::atan2(R(1, 0), R(0, 0)), M_PI);
+  row.yaw = std::remainder(cr.features.yaw - pose_yaw, M_PI);
   row.similarity = cr.similarity;
   row.points = cr.features.points;
   return row;

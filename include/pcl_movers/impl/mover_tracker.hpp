@@ -1433,18 +1433,20 @@ void MoverTracker<PointT>::holdClusters(const Frame& frame, const Association& a
       const int c = association.held_cluster[ti];
       if (track_used[ti] || c < 0 || cluster_used[c]) continue;
       Track& t = tracks_[ti];
-      if (t.missed + 1 > p.track.max_missed_frames && !(frame.use_registration && t.model))
-        continue;  // dies now: let the cluster be born
       const Eigen::Vector2d centroid = candidates[c].features.centroid.template head<2>();
       if (!std::isfinite(t.held_from.z())) t.held_from << centroid, frame.time;
-      if (t.missed + 1 > p.track.max_missed_frames && !heldAlongItsPath(t, centroid, frame.time))
-        continue;  // dies now: let the cluster be born
+      // Held while it may coast; then re-anchored on the held view, or it dies and the cluster
+      // is born.
+      const bool coasted_out = t.missed + 1 > p.track.max_missed_frames;
+      if (coasted_out &&
+          !(frame.use_registration && t.model && heldAlongItsPath(t, centroid, frame.time)))
+        continue;
       track_used[ti] = 1;
       cluster_used[c] = 1;
-      if (t.missed + 1 > p.track.max_missed_frames)
+      if (coasted_out)
         reanchorTrack(t, frame, candidates, c);
       else
-        ++t.missed;  // still coasting
+        ++t.missed;
       t.features = candidates[c].features;
       report(t, 0, results_[c]);
     }
