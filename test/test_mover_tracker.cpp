@@ -16,6 +16,17 @@ namespace {
 using Cloud = pcl::PointCloud<pcl::PointXYZ>;
 using Tracker = pcl_movers::MoverTracker<pcl::PointXYZ>;
 
+/// Observations of `clusters`, each occluded where `occluded` says so and standing on `floors`
+/// (empty: neither known).
+std::vector<pcl_movers::Observation> observed(const std::vector<pcl::PointIndices>& clusters,
+                                              const std::vector<bool>& occluded,
+                                              const std::vector<double>& floors = {}) {
+  auto observations = pcl_movers::observationsOf(clusters);
+  for (std::size_t c = 0; c < occluded.size(); ++c) observations[c].occluded = occluded[c];
+  for (std::size_t c = 0; c < floors.size(); ++c) observations[c].floor_z = floors[c];
+  return observations;
+}
+
 /** A box seen from `sensor`: points on the vertical faces that face the sensor and on the top,
  * spaced like a spinning LiDAR (coarser with range), with 2 cm noise. Appends one cluster. */
 struct SceneBuilder {
@@ -85,6 +96,31 @@ std::vector<Tracker::ClusterResult> step(Tracker& tracker, SceneBuilder& scene,
 }
 
 }  // namespace
+
+// The observations of a split frame: a cut part is marked as one (its side along the cut is not
+// the object's extent) and stands where the whole did; a whole cluster passes unchanged.
+TEST(MoverTracker, ApplyPartsMarksCutPartsAndKeepsWholeObservations) {
+  std::vector<pcl_movers::Observation> observations(2);
+  observations[0].indices.indices = {10, 11, 12, 13};
+  observations[0].floor_z = -1.5;
+  observations[1].indices.indices = {20, 21};
+  observations[1].occluded = true;
+  observations[1].floor_z = 0.25;
+  const std::vector<Tracker::ClusterPart> parts = {{0, {0, 2}}, {0, {1, 3}}, {1, {0, 1}}};
+  const auto cut = Tracker::applyParts(parts, observations);
+  ASSERT_EQ(cut.size(), 3u);
+  EXPECT_EQ(cut[0].indices.indices, (std::vector<int>{10, 12}));
+  EXPECT_EQ(cut[1].indices.indices, (std::vector<int>{11, 13}));
+  for (int k : {0, 1}) {
+    EXPECT_TRUE(cut[k].split_part);
+    EXPECT_TRUE(cut[k].occluded);
+    EXPECT_DOUBLE_EQ(cut[k].floor_z, -1.5);
+  }
+  EXPECT_EQ(cut[2].indices.indices, observations[1].indices.indices);
+  EXPECT_FALSE(cut[2].split_part);
+  EXPECT_TRUE(cut[2].occluded);
+  EXPECT_DOUBLE_EQ(cut[2].floor_z, 0.25);
+}
 
 TEST(MoverTracker, ComputeFeaturesGivesOrientedBox) {
   SceneBuilder scene;
@@ -896,16 +932,16 @@ double emergingVelocityError(int reacquire, double shadow = 3.0, int frames = 30
       if (x > shadow) after.indices.push_back(i);
     }
     scene.clusters.clear();
-    std::vector<std::uint8_t> occluded;
+    std::vector<bool> occluded;
     // The shadow cuts the car from here on (until its rear has passed, with after_emerged).
     const bool emerged = centre.x() - 2.25 > shadow;
     const bool cut = centre.x() + 2.25 > -shadow && !(after_emerged && emerged);
     for (auto* part : {&before, &after})
       if (part->indices.size() >= 10) {
         scene.clusters.push_back(*part);
-        occluded.push_back(cut ? 1 : 0);
+        occluded.push_back(cut);
       }
-    tracker.update(scene.cloud, scene.clusters, sensor, t, occluded);
+    tracker.update(scene.cloud, observed(scene.clusters, occluded), sensor, t);
     const auto& results = tracker.getClusterResults();
     for (std::size_t c = 0; c < results.size(); ++c) {
       const bool front =
@@ -967,8 +1003,7 @@ double velocityErrorAfterEmergingFromAWall() {
       if ((*scene.cloud)[i].x > 0) visible.indices.push_back(i);
     scene.clusters.assign(1, visible);
     const bool cut = centre.x() - half_length < 0;
-    tracker.update(scene.cloud, scene.clusters, sensor, t,
-                   std::vector<std::uint8_t>(1, cut ? 1 : 0));
+    tracker.update(scene.cloud, observed(scene.clusters, {cut}), sensor, t);
     if (cut) continue;
     if (++unoccluded < 3 || unoccluded > 8) continue;
     const auto& r = tracker.getClusterResults()[0];
@@ -1008,14 +1043,13 @@ WalkerFrame walkersFrame(Tracker& tracker, double t, double va, double b0, doubl
     clusters.pop_back();
     out.merged = true;
   }
-  std::vector<std::uint8_t> occluded(clusters.size(), 0);
-  const auto parts = tracker.splitMergedClusters(*scene.cloud, clusters, t);
+  auto observations = pcl_movers::observationsOf(clusters);
+  const auto parts = tracker.splitMergedClusters(*scene.cloud, observations, t);
   if (!parts.empty()) {
     out.split = parts.size() > clusters.size();
-    occluded = Tracker::partFlags(parts, clusters, occluded);
-    clusters = Tracker::applyParts(parts, clusters);
+    observations = Tracker::applyParts(parts, observations);
   }
-  tracker.update(scene.cloud, clusters, sensor, t, occluded);
+  tracker.update(scene.cloud, observations, sensor, t);
   double best_a = 0.5, best_b = 0.5;
   for (const auto& r : tracker.getClusterResults()) {
     if (r.track_id < 0) continue;
@@ -1100,7 +1134,7 @@ TEST(MoverTracker, ReacquiredTrackRestartsFromTheInheritedVelocityWhenItGetsItsM
     const double t = k * 0.1;
     const Eigen::Vector2d centre(-40.0 + speed * t, 25.0);
     SceneBuilder scene;
-    std::vector<std::uint8_t> occluded;
+    std::vector<bool> occluded;
     const Eigen::Vector2d front = centre + Eigen::Vector2d(3.5, 0);
     if (k < 20) {
       scene.addBox(sensor, centre, 0, 8.0, 2.4, 3.0);
@@ -1111,8 +1145,8 @@ TEST(MoverTracker, ReacquiredTrackRestartsFromTheInheritedVelocityWhenItGetsItsM
     } else if (k >= 24) {
       scene.addBox(sensor, front, 0, 1.0, 2.4, 3.0);
     }
-    occluded.assign(scene.clusters.size(), k >= 20 ? 1 : 0);
-    tracker.update(scene.cloud, scene.clusters, sensor, t, occluded);
+    occluded.assign(scene.clusters.size(), k >= 20);
+    tracker.update(scene.cloud, observed(scene.clusters, occluded), sensor, t);
     const auto& results = tracker.getClusterResults();
     for (const auto& r : results) {
       if (k < 24 || r.track_id == 0 || !r.mover) continue;
@@ -1304,7 +1338,7 @@ TEST(MoverTracker, WalkerSeenOnlyAboveAParkedCarIsAMoverThroughTheCarsFloor) {
       keepAbove(scene, 0, 1.5f);
       const std::vector<double> floors =
           variant == 1 ? std::vector<double>{} : std::vector<double>{0.1};
-      tracker.update(scene.cloud, scene.clusters, sensor, t, {}, floors);
+      tracker.update(scene.cloud, observed(scene.clusters, {}, floors), sensor, t);
       movers += tracker.getClusterResults()[0].mover;
     }
     SCOPED_TRACE("variant " + std::to_string(variant));
@@ -1329,8 +1363,9 @@ TEST(MoverTracker, HiddenFromBelowBesideAMoverIsNotASecondMover) {
     scene.addBox(sensor, car, 0.0, 4.5, 1.8, 1.3);
     scene.addBox(sensor, car + Eigen::Vector2d(0.3, 0), 0.0, 1.5, 1.2, 1.8);  // the cabin
     keepAbove(scene, 1, 1.4f);
-    tracker.update(scene.cloud, scene.clusters, sensor, t, {},
-                   {std::numeric_limits<double>::quiet_NaN(), 0.05});
+    tracker.update(scene.cloud,
+                   observed(scene.clusters, {}, {std::numeric_limits<double>::quiet_NaN(), 0.05}),
+                   sensor, t);
     const auto& results = tracker.getClusterResults();
     car_movers += results[0].mover;
     part_movers += results[1].mover;
@@ -1352,8 +1387,10 @@ TEST(MoverTracker, WalkerEmergingFromBehindAParkedCarKeepsItsVelocity) {
     scene.addBox(sensor, Eigen::Vector2d(15, -4 + 1.5 * t), 0.0, 0.5, 0.6, 1.8);
     const bool hidden = k < 20;
     if (hidden) keepAbove(scene, 0, 1.5f);
-    tracker.update(scene.cloud, scene.clusters, sensor, t, {},
-                   {hidden ? 0.1 : std::numeric_limits<double>::quiet_NaN()});
+    tracker.update(
+        scene.cloud,
+        observed(scene.clusters, {}, {hidden ? 0.1 : std::numeric_limits<double>::quiet_NaN()}),
+        sensor, t);
     const auto& r = tracker.getClusterResults()[0];
     if (hidden && k == 19) confirmed_hidden = r.mover;
     if (!hidden) {
@@ -1379,7 +1416,7 @@ TEST(MoverTracker, WalkerHiddenFromBelowNeedsEveryVoteOfAWindow) {
     SceneBuilder scene;
     scene.addBox(sensor, Eigen::Vector2d(15, -4 + 1.5 * t), 0.0, 0.5, 0.6, 1.8);
     keepAbove(scene, 0, 1.5f);
-    tracker.update(scene.cloud, scene.clusters, sensor, t, {}, {0.1});
+    tracker.update(scene.cloud, observed(scene.clusters, {}, {0.1}), sensor, t);
     const auto& r = tracker.getClusterResults()[0];
     if (!r.mover) continue;
     first = k;

@@ -168,12 +168,12 @@ class MoverDetector {
                               const Eigen::Isometry3d& pose, PointCloud& world,
                               std::vector<pcl::PointIndices>& world_clusters);
 
-  /** \brief Lowers each cluster's floor (floor_z_, world z; NaN = none) to the ground under
+  /** \brief Lowers each cluster's floor (Observation::floor_z; NaN = none) to the ground under
    * it: the median over its points of (world z − height above the ground filter's cell plane).
    * A car seen by one or two beams of a sparse sensor shows a 0.1-0.5 m slice, yet its top
    * stands 1.5 m above the ground under it: that is what the mover height test asks. */
   void groundFloors(const PointCloud& world, const std::vector<pcl::PointIndices>& clusters,
-                    const std::vector<pcl::PointIndices>& world_clusters);
+                    std::vector<Observation>& observations);
 
   /** \brief Motion-aware segmentation (free_space.split; MotionSplitter): splits the clusters
    * joining a part seen through by the scan free_space.long_lag frames ago to a surface it saw
@@ -207,17 +207,19 @@ class MoverDetector {
   /** \brief Adds the scan to the free-space map and hands the map to the tracker; false (and no
    * map) when the free-space test is off. */
   bool addToFreeSpaceMap(const PointCloud& organized, const Eigen::Isometry3d& pose);
-  /** \brief What the tracker needs besides the points: each cluster's occluded sides
-   * (occluded_) and what it stands on (floor_z_). */
-  void describeClusters(const PointCloud& organized, const pcl::Indices& objects,
-                        const std::vector<pcl::PointIndices>& clusters,
-                        const Eigen::Isometry3d& pose, const PointCloud& world,
-                        const std::vector<pcl::PointIndices>& world_clusters);
+  /** \brief The tracker's observations of `clusters` (sensor frame; `world_clusters` are the same
+   * clusters in `world`): their points and what the range image and the ground filter say of
+   * them, whether a side is occluded and what they stand on. */
+  std::vector<Observation> describeClusters(const PointCloud& organized,
+                                            const pcl::Indices& objects,
+                                            const std::vector<pcl::PointIndices>& clusters,
+                                            const Eigen::Isometry3d& pose, const PointCloud& world,
+                                            std::vector<pcl::PointIndices> world_clusters);
   /** \brief Splits the clusters that hold two tracks moving differently
-   * (MoverTracker::splitMergedClusters()), both cluster lists and the per-cluster data alike. */
+   * (MoverTracker::splitMergedClusters()), the sensor-frame clusters and the observations alike. */
   void splitMergedClusters(const PointCloud& world, double time,
                            std::vector<pcl::PointIndices>& clusters,
-                           std::vector<pcl::PointIndices>& world_clusters);
+                           std::vector<Observation>& observations);
   /** \brief The frame's labels, track ids and rows from the tracker's cluster results. */
   void writeOutputs(const PointCloud& organized, const pcl::Indices& objects,
                     const std::vector<pcl::PointIndices>& clusters, const Eigen::Isometry3d& pose,
@@ -252,12 +254,11 @@ class MoverDetector {
   SensorModel estimated_model_;  ///< see getEstimatedSensorModel()
   bool has_sensor_model_ = false;
   MoverTracker<PointT> tracker_;
-  FreeSpaceMap free_space_;             ///< recent scans for the tracker's free-space test
-  std::vector<std::uint8_t> occluded_;  ///< occluded sides of each cluster (last frame)
+  FreeSpaceMap free_space_;                   ///< recent scans for the tracker's free-space test
+  std::vector<std::uint8_t> occluded_sides_;  ///< describeClusters()' work buffer
   /// Cell labels of the last frame's range image, shared by occludedSides() and occluderFloors()
   typename RangeImageRegionGrowing<PointT>::CellLabels cell_labels_;
   std::vector<int> floors_;          ///< per cluster: lowest point of a nearer object below, or -1
-  std::vector<double> floor_z_;      ///< what each cluster stands on, world z (NaN: none), tracker
   std::vector<float> ground_under_;  ///< groundFloors()' work buffer, kept between frames
   MotionSplitter splitter_;          ///< splitMovingParts()' splitter and its buffers
   std::vector<Eigen::Vector3f> split_points_;  ///< splitMovingParts(): world points to judge

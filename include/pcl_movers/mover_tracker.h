@@ -7,6 +7,7 @@
 #include <pcl_movers/detector_parameters.h>
 #include <pcl_movers/free_space_map.h>
 #include <pcl_movers/kalman_filter_cv.h>
+#include <pcl_movers/observation.h>
 #include <pcl_movers/surface_density.h>
 
 #include <pcl/PointIndices.h>
@@ -236,9 +237,6 @@ class MoverTracker {
   static constexpr int kUnoccludedFitPositions = 3;
   /// Smallest part splitMergedClusters() cuts off, and tracks (see update()).
   static constexpr int kMinSplitPoints = 4;
-  /// Flag of update()'s `occluded` for a part cut from a merged cluster by splitMergedClusters()
-  /// (partFlags()); a bit of its own, beside RangeImageRegionGrowing's side bits (1 and 2).
-  static constexpr std::uint8_t kSplitPart = 4;
 
   /** \brief A cluster of the frame after splitMergedClusters(): the input cluster it comes from
    * and the positions, in that cluster's index list, of its points. */
@@ -272,21 +270,17 @@ class MoverTracker {
   const DetectorParameters& getParameters() const { return parameters_; }
 
   /** \brief Processes one frame.
-   * \param cloud points in the world frame (may be organized with NaN; only cluster points are
-   * read) \param clusters point indices of each object cluster \param sensor_origin sensor position
-   * in the world frame (ranges → density σ) \param time frame time [s], increasing
-   * \param occluded per cluster, whether a side of it is bounded by a nearer object
-   * (RangeImageRegionGrowing::occludedSides(), non-zero = occluded; the kSplitPart bit = a part
-   * of a merged cluster split by splitMergedClusters(), also tracked below min_cluster_points,
-   * down to kMinSplitPoints); empty = unknown (none)
-   * \param floor_z per cluster, the world z of what it stands on: the lowest point of a nearer
-   * object hiding its lower part (RangeImageRegionGrowing::occluderFloors()) or the ground under
-   * it; NaN where unknown, empty = none. With decision.standing_height the mover height test
-   * measures the cluster's top from there. */
+   * \param cloud points in the world frame (may be organized with NaN; only the observations'
+   * points are read) \param observations this frame's object clusters (Observation: indices into
+   * `cloud`, occlusion, split part, floor) \param sensor_origin sensor position in the world
+   * frame (ranges → density σ) \param time frame time [s], increasing */
+  void update(const PointCloudConstPtr& cloud, const std::vector<Observation>& observations,
+              const Eigen::Vector3d& sensor_origin, double time);
+  /** \brief update() for plain clusters (nothing known besides their points). */
   void update(const PointCloudConstPtr& cloud, const std::vector<pcl::PointIndices>& clusters,
-              const Eigen::Vector3d& sensor_origin, double time,
-              const std::vector<std::uint8_t>& occluded = {},
-              const std::vector<double>& floor_z = {});
+              const Eigen::Vector3d& sensor_origin, double time) {
+    update(cloud, observationsOf(clusters), sensor_origin, time);
+  }
 
   /** \brief Splits the clusters that hold the predicted objects of two or more established tracks
    * moving differently (two walkers passing each other, a cyclist beside a parked car): region
@@ -300,17 +294,16 @@ class MoverTracker {
    * \return empty when nothing was split (the clusters stand as they are), else one part per
    * output cluster, in order: unsplit clusters whole, split ones as several parts. */
   std::vector<ClusterPart> splitMergedClusters(const PointCloud& cloud,
-                                               const std::vector<pcl::PointIndices>& clusters,
+                                               const std::vector<Observation>& observations,
                                                double time) const;
   /** \brief The clusters `parts` (from splitMergedClusters()) describe, cut from `clusters` — or
    * from any list parallel to it (MoverDetector cuts its world and sensor-frame lists alike). */
   static std::vector<pcl::PointIndices> applyParts(const std::vector<ClusterPart>& parts,
                                                    const std::vector<pcl::PointIndices>& clusters);
-  /** \brief The `occluded` flags of update() for the clusters of `parts`: kSplitPart for a part cut
-   * from a cluster, the input cluster's flag (empty `occluded`: 0) for a whole one. */
-  static std::vector<std::uint8_t> partFlags(const std::vector<ClusterPart>& parts,
-                                             const std::vector<pcl::PointIndices>& clusters,
-                                             const std::vector<std::uint8_t>& occluded);
+  /** \brief The observations `parts` describe, cut from `observations`: a whole one as it was,
+   * a part cut from one marked Observation::split_part (and occluded), on the whole's floor. */
+  static std::vector<Observation> applyParts(const std::vector<ClusterPart>& parts,
+                                             const std::vector<Observation>& observations);
 
   /** \brief Scans for the free-space test (see DetectorParameters::free_space_lag); the map must
    * already hold the current frame's scan when update() is called. nullptr (default) disables the
@@ -399,12 +392,12 @@ class MoverTracker {
 
   /** \brief What the steps of one update() share. */
   struct Frame {
-    const PointCloud& cloud;                         ///< the clusters' points, world frame
-    const std::vector<pcl::PointIndices>& clusters;  ///< this frame's clusters
-    Eigen::Vector3d sensor_origin;                   ///< world frame
-    double time;                                     ///< frame time [s]
-    double dt;                                       ///< since the last frame [s]
-    bool use_registration;                           ///< registration mode (else centroid)
+    const PointCloud& cloud;                       ///< the clusters' points, world frame
+    const std::vector<Observation>& observations;  ///< this frame's clusters
+    Eigen::Vector3d sensor_origin;                 ///< world frame
+    double time;                                   ///< frame time [s]
+    double dt;                                     ///< since the last frame [s]
+    bool use_registration;                         ///< registration mode (else centroid)
     float model_weight;  ///< SurfaceDensity::halfLifeWeight() of model_half_life
   };
   /** \brief One frame's association: every gated (track, cluster) pair with its score, best
@@ -419,9 +412,7 @@ class MoverTracker {
   /** \brief Moves every track's filters `dt` seconds ahead. */
   void predictTracks(double dt);
   /** \brief One candidate per cluster: its features and whether it can be tracked. */
-  std::vector<Candidate> makeCandidates(const Frame& frame,
-                                        const std::vector<std::uint8_t>& occluded,
-                                        const std::vector<double>& floor_z);
+  std::vector<Candidate> makeCandidates(const Frame& frame);
   /** \brief Per track, the cluster an established static track is seen in without registration
    * this frame (static_refresh_frames), or -1. */
   std::vector<int> findStillClusters(const Frame& frame,
@@ -461,6 +452,9 @@ class MoverTracker {
   /** \brief Whether the clusters `track` held since Track::held_from moved with its velocity
    * (within track.gate_margin): the held object is the one it follows. */
   bool heldAlongItsPath(const Track& track, const Eigen::Vector2d& centroid, double time) const;
+  /** \brief Whether a view is tall enough, and not large, to register against a model or to
+   * start one. */
+  bool registrable(const ClusterFeatures& features) const;
   /** \brief Coasting tracks missed too long (or seen once and then missed) are deleted. */
   void dropLostTracks(const std::vector<char>& track_used);
   /** \brief A new track for every usable cluster no track took. */

@@ -81,7 +81,8 @@ void MoverDetector<PointT>::coast(const Eigen::Isometry3d& pose, double time, Fr
     tracker_.setFreeSpaceMap(nullptr);
   }
   // No cluster: every track is predicted to `time` and counts a missed frame.
-  tracker_.update(PointCloudConstPtr(new PointCloud), {}, pose.translation(), time);
+  tracker_.update(PointCloudConstPtr(new PointCloud), std::vector<Observation>(),
+                  pose.translation(), time);
 }
 
 template <typename PointT>
@@ -189,10 +190,9 @@ void MoverDetector<PointT>::clustersToWorld(const PointCloud& organized,
 template <typename PointT>
 void MoverDetector<PointT>::groundFloors(const PointCloud& world,
                                          const std::vector<pcl::PointIndices>& clusters,
-                                         const std::vector<pcl::PointIndices>& world_clusters) {
+                                         std::vector<Observation>& observations) {
   if (!ground_.object) return;
   const std::vector<float>& height = ground_.object->getPointHeights();
-  floor_z_.resize(clusters.size(), std::numeric_limits<double>::quiet_NaN());
   std::vector<float>& under = ground_under_;
   for (std::size_t c = 0; c < clusters.size(); ++c) {
     under.clear();
@@ -200,12 +200,13 @@ void MoverDetector<PointT>::groundFloors(const PointCloud& world,
     for (std::size_t k = 0; k < idx.size(); ++k) {
       const auto i = static_cast<std::size_t>(idx[k]);
       if (i < height.size() && std::isfinite(height[i]))
-        under.push_back(world[world_clusters[c].indices[k]].z - height[i]);
+        under.push_back(world[observations[c].indices.indices[k]].z - height[i]);
     }
     if (under.empty()) continue;
     auto mid = under.begin() + static_cast<std::ptrdiff_t>(under.size() / 2);
     std::nth_element(under.begin(), mid, under.end());
-    if (!(*mid >= floor_z_[c])) floor_z_[c] = *mid;  // the lower of ground and occluder floor
+    double& floor_z = observations[c].floor_z;
+    if (!(*mid >= floor_z)) floor_z = *mid;  // the lower of ground and occluder floor
   }
 }
 
@@ -302,9 +303,10 @@ void MoverDetector<PointT>::process(const PointCloudConstPtr& scan,
       splitMovingParts(*organized, pose, clusters, *world, world_clusters);
     split_end = Clock::now();
   }
-  describeClusters(*organized, *objects, clusters, pose, *world, world_clusters);
-  splitMergedClusters(*world, time, clusters, world_clusters);
-  tracker_.update(world, world_clusters, pose.translation(), time, occluded_, floor_z_);
+  std::vector<Observation> observations =
+      describeClusters(*organized, *objects, clusters, pose, *world, std::move(world_clusters));
+  splitMergedClusters(*world, time, clusters, observations);
+  tracker_.update(world, observations, pose.translation(), time);
   const auto t5 = Clock::now();
 
   writeOutputs(*organized, *objects, clusters, pose, result);
@@ -334,55 +336,49 @@ bool MoverDetector<PointT>::addToFreeSpaceMap(const PointCloud& organized,
 }
 
 template <typename PointT>
-void MoverDetector<PointT>::describeClusters(const PointCloud& organized,
-                                             const pcl::Indices& objects,
-                                             const std::vector<pcl::PointIndices>& clusters,
-                                             const Eigen::Isometry3d& pose, const PointCloud& world,
-                                             const std::vector<pcl::PointIndices>& world_clusters) {
+std::vector<Observation> MoverDetector<PointT>::describeClusters(
+    const PointCloud& organized, const pcl::Indices& objects,
+    const std::vector<pcl::PointIndices>& clusters, const Eigen::Isometry3d& pose,
+    const PointCloud& world, std::vector<pcl::PointIndices> world_clusters) {
   const auto& p = parameters_;
+  std::vector<Observation> observations(clusters.size());
+  for (std::size_t c = 0; c < clusters.size(); ++c)
+    observations[c].indices = std::move(world_clusters[c]);
   // One labelling of the range image's cells serves both occlusion tests below.
   if (p.track.occluded_fraction > 0 || p.decision.standing_height)
     RangeImageRegionGrowing<PointT>::cellLabels(organized, objects, clusters, cell_labels_);
   // Occluded cluster sides (range image, sensor frame): measurements there can slide.
-  if (p.track.occluded_fraction > 0)
+  if (p.track.occluded_fraction > 0) {
     RangeImageRegionGrowing<PointT>::occludedSides(
         organized, cell_labels_, clusters, static_cast<float>(p.segment.depth_ratio),
         static_cast<float>(p.segment.depth_min), p.segment.max_gap, true,
-        static_cast<float>(p.track.occluded_fraction), occluded_);
-  else
-    occluded_.clear();
+        static_cast<float>(p.track.occluded_fraction), occluded_sides_);
+    for (std::size_t c = 0; c < clusters.size(); ++c)
+      observations[c].occluded = occluded_sides_[c] != 0;
+  }
   // What each cluster stands on, as a world z (the mover height test, standingHeight()): the
   // lowest point of a nearer object hiding it from below, else the ground under it.
-  floor_z_.clear();
-  if (!p.decision.standing_height) return;
+  if (!p.decision.standing_height) return observations;
   RangeImageRegionGrowing<PointT>::occluderFloors(
       organized, cell_labels_, clusters, static_cast<float>(p.segment.depth_ratio),
       static_cast<float>(p.segment.depth_min), p.segment.max_gap, 0.5f, floors_);
-  floor_z_.assign(clusters.size(), std::numeric_limits<double>::quiet_NaN());
   for (std::size_t c = 0; c < clusters.size(); ++c)
     if (floors_[c] >= 0)
-      floor_z_[c] = (pose * organized[floors_[c]].getVector3fMap().template cast<double>()).z();
-  groundFloors(world, clusters, world_clusters);
+      observations[c].floor_z =
+          (pose * organized[floors_[c]].getVector3fMap().template cast<double>()).z();
+  groundFloors(world, clusters, observations);
+  return observations;
 }
 
 template <typename PointT>
 void MoverDetector<PointT>::splitMergedClusters(const PointCloud& world, double time,
                                                 std::vector<pcl::PointIndices>& clusters,
-                                                std::vector<pcl::PointIndices>& world_clusters) {
+                                                std::vector<Observation>& observations) {
   // Clusters holding objects of two tracks that move differently are split between them; the
-  // sensor-frame clusters (outputs) and the occlusion flags and floors follow the same split.
-  const auto parts = tracker_.splitMergedClusters(world, world_clusters, time);
+  // sensor-frame clusters (outputs) follow the same split.
+  const auto parts = tracker_.splitMergedClusters(world, observations, time);
   if (parts.empty()) return;
-  // A split part's side along the cut is not the object's extent: occluded (kSplitPart, see
-  // MoverTracker::update()).
-  occluded_ = MoverTracker<PointT>::partFlags(parts, clusters, occluded_);
-  if (!floor_z_.empty()) {
-    std::vector<double> part_floor(parts.size());
-    for (std::size_t k = 0; k < parts.size(); ++k)
-      part_floor[k] = floor_z_[static_cast<std::size_t>(parts[k].cluster)];
-    floor_z_.swap(part_floor);
-  }
-  world_clusters = MoverTracker<PointT>::applyParts(parts, world_clusters);
+  observations = MoverTracker<PointT>::applyParts(parts, observations);
   clusters = MoverTracker<PointT>::applyParts(parts, clusters);
 }
 

@@ -582,7 +582,7 @@ bool MoverTracker<PointT>::slowFreeSpaceEvidence(Track& track,
 
 template <typename PointT>
 std::vector<typename MoverTracker<PointT>::ClusterPart> MoverTracker<PointT>::splitMergedClusters(
-    const PointCloud& cloud, const std::vector<pcl::PointIndices>& clusters, double time) const {
+    const PointCloud& cloud, const std::vector<Observation>& observations, double time) const {
   const auto& p = parameters_;
   std::vector<ClusterPart> parts;
   if (!p.track.split_merged || !has_time_ || p.track.mode == "centroid") return parts;
@@ -652,14 +652,14 @@ std::vector<typename MoverTracker<PointT>::ClusterPart> MoverTracker<PointT>::sp
   const auto addWhole = [&](std::size_t b) {
     ClusterPart whole;
     whole.cluster = static_cast<int>(b);
-    whole.positions.resize(clusters[b].indices.size());
+    whole.positions.resize(observations[b].indices.indices.size());
     std::iota(whole.positions.begin(), whole.positions.end(), 0);
     parts.push_back(std::move(whole));
   };
   bool any_split = false;
   std::vector<std::size_t> near;
-  for (std::size_t c = 0; c < clusters.size(); ++c) {
-    const auto& idx = clusters[c].indices;
+  for (std::size_t c = 0; c < observations.size(); ++c) {
+    const auto& idx = observations[c].indices.indices;
     // Cheap rejection by bounding boxes, of an even subsample of at most 64 points (this runs
     // on every cluster of the frame; the claim margin covers what the subsample misses).
     Eigen::Vector2f lo = Eigen::Vector2f::Constant(std::numeric_limits<float>::max()), hi = -lo;
@@ -774,18 +774,26 @@ bool MoverTracker<PointT>::besideMover(const Track& track) const {
 }
 
 template <typename PointT>
-std::vector<std::uint8_t> MoverTracker<PointT>::partFlags(
-    const std::vector<ClusterPart>& parts, const std::vector<pcl::PointIndices>& clusters,
-    const std::vector<std::uint8_t>& occluded) {
-  std::vector<std::uint8_t> flags(parts.size(), 0);
+std::vector<Observation> MoverTracker<PointT>::applyParts(
+    const std::vector<ClusterPart>& parts, const std::vector<Observation>& observations) {
+  std::vector<Observation> cut(parts.size());
   for (std::size_t k = 0; k < parts.size(); ++k) {
-    const auto c = static_cast<std::size_t>(parts[k].cluster);
-    if (parts[k].positions.size() != clusters[c].indices.size())
-      flags[k] = kSplitPart;
-    else if (c < occluded.size())
-      flags[k] = occluded[c];
+    const Observation& whole = observations[static_cast<std::size_t>(parts[k].cluster)];
+    const auto& positions = parts[k].positions;
+    if (positions.size() == whole.indices.indices.size()) {
+      cut[k] = whole;
+      continue;
+    }
+    // A part's side along the cut is not the object's extent; it stands where the whole did.
+    cut[k].split_part = true;
+    cut[k].occluded = true;
+    cut[k].floor_z = whole.floor_z;
+    cut[k].indices.header = whole.indices.header;
+    cut[k].indices.indices.reserve(positions.size());
+    for (const int i : positions)
+      cut[k].indices.indices.push_back(whole.indices.indices[static_cast<std::size_t>(i)]);
   }
-  return flags;
+  return cut;
 }
 
 template <typename PointT>
@@ -869,19 +877,17 @@ void MoverTracker<PointT>::decideMover(Track& track,
 
 template <typename PointT>
 void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
-                                  const std::vector<pcl::PointIndices>& clusters,
-                                  const Eigen::Vector3d& sensor_origin, double time,
-                                  const std::vector<std::uint8_t>& occluded,
-                                  const std::vector<double>& floor_z) {
+                                  const std::vector<Observation>& observations,
+                                  const Eigen::Vector3d& sensor_origin, double time) {
   const auto& p = parameters_;
-  results_.assign(clusters.size(), ClusterResult());
+  results_.assign(observations.size(), ClusterResult());
   registrations_ = 0;
   const double dt = has_time_ ? std::max(0.0, time - last_time_) : 0.0;
   has_time_ = true;
   last_time_ = time;
   const Frame frame{
       *cloud,
-      clusters,
+      observations,
       sensor_origin,
       time,
       dt,
@@ -889,7 +895,7 @@ void MoverTracker<PointT>::update(const PointCloudConstPtr& cloud,
       SurfaceDensity::halfLifeWeight(static_cast<float>(p.registration.model_half_life))};
 
   predictTracks(dt);
-  std::vector<Candidate> candidates = makeCandidates(frame, occluded, floor_z);
+  std::vector<Candidate> candidates = makeCandidates(frame);
   const Association association =
       associate(frame, candidates, findStillClusters(frame, candidates));
 
@@ -920,27 +926,24 @@ void MoverTracker<PointT>::predictTracks(double dt) {
 
 template <typename PointT>
 std::vector<typename MoverTracker<PointT>::Candidate> MoverTracker<PointT>::makeCandidates(
-    const Frame& frame, const std::vector<std::uint8_t>& occluded,
-    const std::vector<double>& floor_z) {
+    const Frame& frame) {
   const auto& p = parameters_;
-  std::vector<Candidate> candidates(frame.clusters.size());
-  for (std::size_t c = 0; c < frame.clusters.size(); ++c) {
+  std::vector<Candidate> candidates(frame.observations.size());
+  for (std::size_t c = 0; c < frame.observations.size(); ++c) {
+    const Observation& observation = frame.observations[c];
     auto& cand = candidates[c];
-    cand.features = computeFeatures(frame.cloud, frame.clusters[c].indices);
+    cand.features = computeFeatures(frame.cloud, observation.indices.indices);
     const double range =
         (cand.features.centroid.template head<2>() - frame.sensor_origin.template head<2>()).norm();
-    // A part split off a merged cluster (kSplitPart) belongs to an established track: it is
-    // tracked down to kMinSplitPoints (a walker half hidden behind the one it passes). Its own
-    // bit: with the value 2 it once shared, a cluster whose right side was occluded was tracked
-    // down to kMinSplitPoints too.
-    const std::uint8_t flag = occluded.size() == frame.clusters.size() ? occluded[c] : 0;
+    // A part split off a merged cluster belongs to an established track: it is tracked down to
+    // kMinSplitPoints (a walker half hidden behind the one it passes).
     cand.usable = (cand.features.points >= p.segment.min_cluster_points ||
-                   ((flag & kSplitPart) && cand.features.points >= kMinSplitPoints)) &&
+                   (observation.split_part && cand.features.points >= kMinSplitPoints)) &&
                   range <= p.track.max_range;
     cand.features.large = cand.features.length > p.decision.max_length ||
                           cand.features.height > p.decision.max_height;
-    cand.features.occluded = flag != 0;
-    if (floor_z.size() == frame.clusters.size()) cand.features.floor_z = floor_z[c];
+    cand.features.occluded = observation.occluded || observation.split_part;
+    cand.features.floor_z = observation.floor_z;
     results_[c].features = cand.features;
   }
   return candidates;
@@ -1055,11 +1058,7 @@ void MoverTracker<PointT>::gateTrack(std::size_t ti, const Frame& frame,
   for (std::size_t c = 0; c < candidates.size(); ++c) {
     auto& cand = candidates[c];
     if (!cand.usable) continue;
-    // Objects far too low to be movers and big structures are not worth a registration. Half
-    // the mover height is used so that a vehicle whose visible height fluctuates around
-    // min_mover_height keeps its registered track.
-    const bool cand_registrable =
-        !cand.features.large && cand.features.height >= 0.5 * p.decision.min_height;
+    const bool cand_registrable = registrable(cand.features);
     // Centroids are compared with the predicted centroid, not the predicted reference point:
     // a car first seen head-on at 80 m has its reference point at its front, 1.5-2 m from the
     // centroid of its side view when it passes (open scene: the track was lost and re-born).
@@ -1123,7 +1122,7 @@ void MoverTracker<PointT>::gateTrack(std::size_t ti, const Frame& frame,
     Match m;
     m.track = ti;
     m.cluster = c;
-    ensurePoints(frame.cloud, frame.clusters[c], cand);
+    ensurePoints(frame.cloud, frame.observations[c].indices, cand);
     // A track seen once has no velocity yet: its prediction is vague and the search would
     // have to cover every possible speed. Its centroid shift is a good enough first guess
     // for a small search window instead.
@@ -1347,9 +1346,8 @@ void MoverTracker<PointT>::updateModel(Track& t, const Match& m, const Frame& fr
   // A track born too low (e.g. half hidden) gets its model once it is seen tall enough.
   // Its velocity so far came from centroids of a partial view, which jump when the rest of
   // the object appears: the registered track starts afresh (position and age are kept).
-  if (frame.use_registration && !t.model && !t.large &&
-      cand.features.height >= 0.5 * p.decision.min_height) {
-    ensurePoints(frame.cloud, frame.clusters[m.cluster], candidates[m.cluster]);
+  if (frame.use_registration && !t.model && !t.large && registrable(cand.features)) {
+    ensurePoints(frame.cloud, frame.observations[m.cluster].indices, candidates[m.cluster]);
     t.model = makeModel(candidates[m.cluster], frame.sensor_origin);
     // A re-acquired track keeps the velocity it inherited, not what its filter made of the
     // partial views' centroids since (a wooded car's front emerging past a trunk: a jump to
@@ -1385,7 +1383,7 @@ void MoverTracker<PointT>::decideAndRemember(Track& t, const Match& m, const Fra
   const auto& p = parameters_;
   std::vector<Eigen::Vector3f> world_points;
   if (free_space_map_ && p.free_space.lag > 0 && !t.large) {
-    ensurePoints(frame.cloud, frame.clusters[m.cluster], candidates[m.cluster]);
+    ensurePoints(frame.cloud, frame.observations[m.cluster].indices, candidates[m.cluster]);
     const auto& pts = *candidates[m.cluster].points;
     world_points.reserve(pts.size());
     for (const auto& q : pts) world_points.emplace_back(q.x, q.y, q.z);
@@ -1463,7 +1461,7 @@ void MoverTracker<PointT>::reanchorTrack(Track& t, const Frame& frame,
   // moves to that view's centroid, and the positions it remembers move with it, so its line
   // stays the line it was.
   Candidate& cand = candidates[c];
-  ensurePoints(frame.cloud, frame.clusters[c], cand);
+  ensurePoints(frame.cloud, frame.observations[c].indices, cand);
   const Eigen::Vector2d shift = cand.features.centroid.template head<2>() - t.filter.position();
   const auto moveBy = [&](KalmanFilterCV& filter) {
     if (!filter.isInitialized()) return;
@@ -1496,6 +1494,14 @@ bool MoverTracker<PointT>::heldAlongItsPath(const Track& t, const Eigen::Vector2
   const Eigen::Vector2d moved = centroid - t.held_from.template head<2>();
   const double off_path = (moved - t.filter.velocity() * since).norm();
   return off_path <= parameters_.track.gate_margin && off_path < moved.norm();
+}
+
+template <typename PointT>
+bool MoverTracker<PointT>::registrable(const ClusterFeatures& features) const {
+  // Objects far too low to be movers and big structures are not worth a registration, nor a
+  // model. Half the mover height is used so that a vehicle whose visible height fluctuates
+  // around min_height keeps its registered track.
+  return !features.large && features.height >= 0.5 * parameters_.decision.min_height;
 }
 
 template <typename PointT>
@@ -1585,8 +1591,8 @@ void MoverTracker<PointT>::bearTracks(const Frame& frame, std::vector<Candidate>
     t.seen_occluded = cand.features.occluded;
     t.history.emplace_back(cand.features.centroid.x(), cand.features.centroid.y(), frame.time);
     t.long_history = t.history;
-    if (frame.use_registration && !t.large && cand.features.height >= 0.5 * p.decision.min_height) {
-      ensurePoints(frame.cloud, frame.clusters[c], cand);
+    if (frame.use_registration && !t.large && registrable(cand.features)) {
+      ensurePoints(frame.cloud, frame.observations[c].indices, cand);
       t.model = makeModel(cand, frame.sensor_origin);
     }
     auto& r = results_[c];
