@@ -390,6 +390,16 @@ class MoverTracker {
     bool cheap = false;  ///< static track seen without registration
   };
 
+  /** \brief Where a track looks for its object this frame (association). */
+  struct TrackGate {
+    std::size_t track = 0;
+    Eigen::Vector2d predicted = Eigen::Vector2d::Zero();  ///< predicted reference point
+    double prior_search = 0;  ///< the velocity prior's gate radius (without margin) [m]
+    double search = 0;        ///< radius searched (prior_search, or further for a young track)
+    /// (centroid distance to the predicted centroid, cluster) of the candidates in the gate.
+    std::vector<std::pair<double, std::size_t>> candidates;
+  };
+
   /** \brief What the steps of one update() share. */
   struct Frame {
     const PointCloud& cloud;                       ///< the clusters' points, world frame
@@ -421,11 +431,34 @@ class MoverTracker {
    * tracks seen in the last frame first. */
   Association associate(const Frame& frame, std::vector<Candidate>& candidates,
                         const std::vector<int>& still);
-  /** \brief The gate and scores of track `ti`; the clusters it matched confidently are
-   * `claimed` (coasting static tracks do not register those). */
+  /** \brief The gate and scores of track `ti` (the scorer by the track: scoreByCentroid(),
+   * scoreStill() or scoreByRegistration()); the clusters it matched confidently are `claimed`
+   * (coasting static tracks do not register those). */
   void gateTrack(std::size_t ti, const Frame& frame, std::vector<Candidate>& candidates,
                  const std::vector<int>& still, std::vector<char>& claimed,
                  Association& association);
+  /** \brief Track `ti`'s prediction and search radii into `gate` (not its candidates). */
+  void setGate(std::size_t ti, const Frame& frame, TrackGate& gate) const;
+  /** \brief The usable candidates within the gate, in cluster order, into `gate.candidates`; a
+   * candidate too low to register near a confirmed mover with a model may be held instead
+   * (Association::held_cluster). */
+  void gateCandidates(TrackGate& gate, const Frame& frame, const std::vector<Candidate>& candidates,
+                      Association& association) const;
+  // The scorers: each turns the gated candidates into scored matches. The score orders all
+  // matches of the frame for the greedy assignment (a B in [0, 1] above any centroid score).
+  /** \brief The simplest approach (centroid mode, tracks without a model, large structures):
+   * every gated candidate, scored by minus its centroid distance. */
+  void scoreByCentroid(const TrackGate& gate, const std::vector<Candidate>& candidates,
+                       Association& association) const;
+  /** \brief An established static track whose nearest cluster did not move
+   * (findStillClusters()): that cluster, unregistered, at the track's last similarity. */
+  void scoreStill(const TrackGate& gate, std::size_t still_cluster, std::vector<char>& claimed,
+                  Association& association) const;
+  /** \brief The paper's: each gated candidate registered onto the track's model, nearest first,
+   * scored by its similarity B; a confident match stops the search. */
+  void scoreByRegistration(const TrackGate& gate, const Frame& frame,
+                           std::vector<Candidate>& candidates, std::vector<char>& claimed,
+                           Association& association);
   /** \brief A static track seen, unregistered, in its still cluster. */
   void seeStill(Track& track, const Candidate& candidate, ClusterResult& result);
   /** \brief Updates the track of match `m` with its cluster: filters, history, model, decision. */
@@ -564,7 +597,8 @@ class MoverTracker {
   SurfaceDensity view_;
   std::vector<Eigen::Vector3f> view_points_;
   std::vector<float> view_sigmas_;
-  /// Buffer of gateTrack(): its gated candidates to register (centroid distance, cluster).
+  TrackGate gate_;  ///< gateTrack()'s work buffer
+  /// Buffer of scoreByRegistration(): its gated candidates to register (distance, cluster).
   std::vector<std::pair<double, std::size_t>> to_register_;
   const FreeSpaceMap* free_space_map_ = nullptr;
 };

@@ -72,8 +72,8 @@ MoverTracker<PointT>::MoverTracker(const MoverTracker& other) {
 template <typename PointT>
 MoverTracker<PointT>& MoverTracker<PointT>::operator=(const MoverTracker& other) {
   if (this == &other) return *this;
-  // Every member but the work buffers (registration_, view_*, to_register_), which each tracker
-  // keeps its own.
+  // Every member but the work buffers (registration_, view_*, gate_, to_register_), which each
+  // tracker keeps its own.
   parameters_ = other.parameters_;
   tracks_ = other.tracks_;
   results_ = other.results_;
@@ -1028,13 +1028,25 @@ void MoverTracker<PointT>::gateTrack(std::size_t ti, const Frame& frame,
                                      std::vector<Candidate>& candidates,
                                      const std::vector<int>& still, std::vector<char>& claimed,
                                      Association& association) {
-  const auto& p = parameters_;
-  const double accel_term = 0.5 * p.track.acceleration_limit * frame.dt * frame.dt;
-  auto& to_register = to_register_;
+  TrackGate& gate = gate_;  // a work buffer: its candidate list keeps its capacity
+  setGate(ti, frame, gate);
+  gateCandidates(gate, frame, candidates, association);
   const Track& track = tracks_[ti];
-  const bool skip_claimed = track.missed > 0 && !track.mover && !track.confirmed &&
-                            track.filter.speed() < 0.5 * p.decision.speed;
-  const Eigen::Vector2d predicted = track.filter.position();
+  const bool centroid_only = !frame.use_registration || track.large || !track.model;
+  if (centroid_only)
+    scoreByCentroid(gate, candidates, association);
+  else if (still[ti] >= 0)
+    scoreStill(gate, static_cast<std::size_t>(still[ti]), claimed, association);
+  else
+    scoreByRegistration(gate, frame, candidates, claimed, association);
+}
+
+template <typename PointT>
+void MoverTracker<PointT>::setGate(std::size_t ti, const Frame& frame, TrackGate& gate) const {
+  const auto& p = parameters_;
+  const Track& track = tracks_[ti];
+  gate.track = ti;
+  gate.predicted = track.filter.position();
   const double meas_sigma =
       track.large || !frame.use_registration ? p.track.centroid_sigma : p.track.registration_sigma;
   const Eigen::Matrix2d S =
@@ -1043,70 +1055,110 @@ void MoverTracker<PointT>::gateTrack(std::size_t ti, const Frame& frame,
       std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(S, Eigen::EigenvaluesOnly)
                         .eigenvalues()
                         .maxCoeff()));
-  const double prior_search =
-      std::min(p.track.max_gate_radius, p.track.gate_sigmas * sigma + accel_term);
+  const double accel_term = 0.5 * p.track.acceleration_limit * frame.dt * frame.dt;
+  gate.prior_search = std::min(p.track.max_gate_radius, p.track.gate_sigmas * sigma + accel_term);
   // A registered track seen once may be as fast as traffic: its second view is searched as far
   // as any track's, whatever its velocity prior (a 33 m/s car moves 3.3 m a frame), but a view
-  // beyond the prior's gate is taken only when it registers confidently onto the model (below);
-  // startsFast() then takes the velocity from the two views. Not a re-acquired track: it starts
-  // with the velocity of the mover it continues, whose gate is the right one.
+  // beyond the prior's gate is taken only when it registers confidently onto the model
+  // (scoreByRegistration()); startsFast() then takes the velocity from the two views. Not a
+  // re-acquired track: it starts with the velocity of the mover it continues, whose gate is the
+  // right one.
   const bool search_fast =
       frame.use_registration && track.model && track.hits < 2 && !track.reacquired;
-  const double search = search_fast ? p.track.max_gate_radius : prior_search;
-  // Gated candidates that need a registration, with their centroid distances (see below).
-  to_register.clear();
+  gate.search = search_fast ? p.track.max_gate_radius : gate.prior_search;
+}
+
+template <typename PointT>
+void MoverTracker<PointT>::gateCandidates(TrackGate& gate, const Frame& frame,
+                                          const std::vector<Candidate>& candidates,
+                                          Association& association) const {
+  const auto& p = parameters_;
+  const std::size_t ti = gate.track;
+  const Track& track = tracks_[ti];
+  const bool centroid_only = !frame.use_registration || track.large || !track.model;
+  gate.candidates.clear();
   for (std::size_t c = 0; c < candidates.size(); ++c) {
-    auto& cand = candidates[c];
+    const auto& cand = candidates[c];
     if (!cand.usable) continue;
-    const bool cand_registrable = registrable(cand.features);
     // Centroids are compared with the predicted centroid, not the predicted reference point:
     // a car first seen head-on at 80 m has its reference point at its front, 1.5-2 m from the
     // centroid of its side view when it passes (open scene: the track was lost and re-born).
     const double distance =
-        (cand.features.centroid.template head<2>() - predicted - track.centroid_offset).norm();
+        (cand.features.centroid.template head<2>() - gate.predicted - track.centroid_offset).norm();
     // A track with a model is only ever updated by registration: mixing centroid measurements
     // into its reference-point track would fake motion.
-    if (frame.use_registration && track.model && !cand_registrable) {
+    if (frame.use_registration && track.model && !registrable(cand.features)) {
       // But a confirmed mover may hold it (see holdClusters()): a walker passing behind a
       // parked car shows only its head and shoulders, too low to register.
       if (track.confirmed && !cand.features.large &&
-          distance <= std::min(p.track.max_gate_radius, search) + p.track.gate_margin &&
+          distance <= std::min(p.track.max_gate_radius, gate.search) + p.track.gate_margin &&
           distance < association.held_distance[ti]) {
         association.held_distance[ti] = distance;
         association.held_cluster[ti] = static_cast<int>(c);
       }
       continue;
     }
-    const bool centroid_only = !frame.use_registration || track.large || !track.model;
     // Big structures: their centroid moves a lot as they come into view, gate generously.
     const double margin = centroid_only && (track.large || cand.features.large)
                               ? 0.5 * std::max(track.features.length, cand.features.length)
                               : p.track.gate_margin;
-    const double gate = std::min(p.track.max_gate_radius + margin, search + margin);
-    if (distance > gate) continue;
+    if (distance > std::min(p.track.max_gate_radius + margin, gate.search + margin)) continue;
     if (std::abs(cand.features.centroid.z() - track.features.centroid.z()) > 1.5) continue;
+    gate.candidates.emplace_back(distance, c);
+  }
+}
+
+template <typename PointT>
+void MoverTracker<PointT>::scoreByCentroid(const TrackGate& gate,
+                                           const std::vector<Candidate>& candidates,
+                                           Association& association) const {
+  for (const auto& dc : gate.candidates) {
     Match m;
-    m.track = ti;
-    m.cluster = c;
-    if (!centroid_only && still[ti] >= 0) {
-      // Established static track whose nearest cluster did not move: seen, no registration;
-      // its other gated clusters are left to the other tracks.
-      if (static_cast<int>(c) != still[ti]) continue;
-      m.cheap = true;
-      m.measurement = Eigen::Vector3d(predicted.x(), predicted.y(), track.z);
-      m.score = track.similarity;
-      m.similarity = track.similarity;
-    } else if (centroid_only) {
-      m.measurement = cand.features.centroid;
-      m.score = -distance;  // below every B, so registered matches are assigned first
-      m.similarity = 0;
-    } else {
-      if (!(skip_claimed && claimed[c])) to_register.emplace_back(distance, c);
-      continue;
-    }
-    if (m.cheap && track.missed == 0) claimed[c] = 1;
+    m.track = gate.track;
+    m.cluster = dc.second;
+    m.measurement = candidates[dc.second].features.centroid;
+    m.score = -dc.first;  // below every B, so registered matches are assigned first
+    m.similarity = 0;
     association.matches.push_back(std::move(m));
   }
+}
+
+template <typename PointT>
+void MoverTracker<PointT>::scoreStill(const TrackGate& gate, std::size_t still_cluster,
+                                      std::vector<char>& claimed, Association& association) const {
+  // Established static track whose nearest cluster did not move: seen, no registration; its
+  // other gated clusters are left to the other tracks.
+  const Track& track = tracks_[gate.track];
+  for (const auto& dc : gate.candidates) {
+    if (dc.second != still_cluster) continue;
+    Match m;
+    m.track = gate.track;
+    m.cluster = dc.second;
+    m.cheap = true;
+    m.measurement = Eigen::Vector3d(gate.predicted.x(), gate.predicted.y(), track.z);
+    m.score = track.similarity;
+    m.similarity = track.similarity;
+    if (track.missed == 0) claimed[dc.second] = 1;
+    association.matches.push_back(std::move(m));
+  }
+}
+
+template <typename PointT>
+void MoverTracker<PointT>::scoreByRegistration(const TrackGate& gate, const Frame& frame,
+                                               std::vector<Candidate>& candidates,
+                                               std::vector<char>& claimed,
+                                               Association& association) {
+  const auto& p = parameters_;
+  const std::size_t ti = gate.track;
+  const Track& track = tracks_[ti];
+  // A coasting track that is not a mover does not register clusters claimed by a track seen in
+  // the last frame (see associate()).
+  const bool skip_claimed = track.missed > 0 && !track.mover && !track.confirmed &&
+                            track.filter.speed() < 0.5 * p.decision.speed;
+  auto& to_register = to_register_;
+  to_register.clear();
+  for (const auto& dc : gate.candidates)
+    if (!(skip_claimed && claimed[dc.second])) to_register.push_back(dc);
   // Registrations, nearest centroid first. Once one reaches registration_stop_similarity the
   // farther candidates are not registered: they would have to match the model even better to
   // win this track, which they rarely do (on KITTI ~1 in 30 of them won, mostly against
@@ -1126,8 +1178,8 @@ void MoverTracker<PointT>::gateTrack(std::size_t ti, const Frame& frame,
     // A track seen once has no velocity yet: its prediction is vague and the search would
     // have to cover every possible speed. Its centroid shift is a good enough first guess
     // for a small search window instead.
-    Eigen::Vector2d guess = predicted;
-    double radius = std::max(search, 2 * p.registration.resolution);
+    Eigen::Vector2d guess = gate.predicted;
+    double radius = std::max(gate.search, 2 * p.registration.resolution);
     if (track.hits < 2) {
       guess = track.history.back().template head<2>() +
               (cand.features.centroid - track.features.centroid).template head<2>();
@@ -1143,7 +1195,7 @@ void MoverTracker<PointT>::gateTrack(std::size_t ti, const Frame& frame,
       continue;
     }
     const bool confident = m.similarity >= p.registration.stop_similarity;
-    if (!confident && distance > prior_search + p.track.gate_margin) continue;
+    if (!confident && distance > gate.prior_search + p.track.gate_margin) continue;
     if (confident && track.missed == 0) claimed[c] = 1;
     association.matches.push_back(std::move(m));
     // A fragment of the object (a walker's legs cut from the body by a dropped row) can match
