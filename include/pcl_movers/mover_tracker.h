@@ -7,8 +7,11 @@
 #include <pcl_movers/detector_parameters.h>
 #include <pcl_movers/free_space_map.h>
 #include <pcl_movers/kalman_filter_cv.h>
+#include <pcl_movers/line_fit.h>
+#include <pcl_movers/mover_decision.h>
 #include <pcl_movers/observation.h>
 #include <pcl_movers/surface_density.h>
+#include <pcl_movers/track.h>
 
 #include <pcl/PointIndices.h>
 #include <pcl/point_cloud.h>
@@ -21,42 +24,6 @@
 #include <vector>
 
 namespace pcl_movers {
-/** \brief The last few values a track keeps (positions, votes, views), oldest first.
- *
- * A vector with pop_front(), not a std::deque: a deque allocates even when it is moved from, and
- * its move may throw, so std::vector<Track> copied every track (all its views and points) each
- * time it grew, and every birth and deletion allocated a dozen times (about 8 M instructions a
- * KITTI frame). The windows hold at most a few dozen values: shifting them is cheap. */
-template <typename T>
-class Fifo : public std::vector<T> {
- public:
-  void pop_front() { this->erase(this->begin()); }
-};
-
-/** \brief The test of the mover decision that settled a track's last update, in the order
- * MoverTracker tests them: why an object is, or is not, a mover (tracks.csv `reason`). */
-enum class MoverReason : std::uint8_t {
-  kNew,           ///< seen once: no motion measured yet
-  kLarge,         ///< larger than any mover: static structure, tracked by its centroid
-  kYoung,         ///< fewer than mover_min_age updates and its motion not yet beyond doubt
-  kLow,           ///< lower than min_mover_height in every view
-  kNoMotion,      ///< neither fast motion (speed votes) nor sustained slow motion
-  kNoFreeSpace,   ///< moves, but too few of its views fall in space earlier scans saw empty
-  kFast,          ///< mover: speed votes and free-space evidence
-  kWellMeasured,  ///< mover while young: its displacement beyond doubt and seen through
-  kSustained,     ///< mover: sustained slow motion (slow_window) and free-space evidence
-  kLatched        ///< mover: confirmed by mover_window decisions in a row (mover_latch)
-};
-
-/** \brief The name of a reason as tracks.csv writes it: new, large, young, low, no_motion,
- * no_free_space, fast, well_measured, sustained, latched. */
-inline const char* moverReasonName(MoverReason reason) {
-  static const char* const names[] = {"new",       "large",         "young", "low",
-                                      "no_motion", "no_free_space", "fast",  "well_measured",
-                                      "sustained", "latched"};
-  return names[static_cast<int>(reason)];
-}
-
 /** \brief Tracks every object cluster of a LiDAR sequence and decides which are movers
  * (Morris et al., section 6).
  *
@@ -82,27 +49,14 @@ inline const char* moverReasonName(MoverReason reason) {
  *     `max_missed_frames` such frames restarts its model from it when the held clusters moved
  *     along its path (reanchorTrack()); unmatched clusters start new tracks (at most
  *     `max_tracks` live tracks);
- *  6. mover decision: speed > `mover_speed` (and > `mover_speed_sigmas` times its own standard
- *     deviation, so young or far tracks with vague velocities wait) in `mover_votes` of the last
- *     `mover_window` updates,
- *     at least `mover_min_age` updates, the tallest view at least `min_mover_height`, the net
- *     displacement of the measurements over the
- *     window at least `displacement_ratio`·`mover_speed`·elapsed time (a filter velocity inflated
- *     by a few noisy measurements does not survive this check), and — when a FreeSpaceMap is set —
- *     free-space evidence (tests run on every fast update from the third on, in parallel with
- *     the speed votes): at least `free_space_min_fraction` of the object's points lie in space
- *     an earlier scan saw through, or its earlier points lie in space the current scan sees
- *     through (FreeSpaceMap). Static objects cannot produce this evidence, whatever their
- *     registration or segmentation errors, so it rejects the centroid-shift and registration-slip
- *     false alarms the kinematic rules let through;
- *     Early confirmation (`confirm_false_rate`): a track whose last update registered well
- *     (B ≥ `confirm_min_similarity`, ≥ `confirm_min_points` points) and whose window's line fit
- *     rejects "velocity = 0" in an F-test at that false-positive rate (σ from the scatter, at
- *     least `confirm_sigma_floor`) while being faster than `mover_speed` skips the vote count
- *     and the minimum age, and needs `confirm_free_space_votes` free-space tests;
- *  7. latching (`mover_latch`): a track decided mover in `mover_window` consecutive updates stays
- *     a mover while its track lives (a car waiting at a light, a pedestrian pausing), unless it
- *     becomes a large structure.
+ *  6. mover decision (MoverDecision, after every update): named tests in order, the first one
+ *     failed is the reason written per row — large, latched, young (< `decision.min_age` updates
+ *     unless the motion is beyond doubt), low (never `decision.min_height` tall), no_motion
+ *     (neither speed votes nor sustained slow motion), no_free_space (too few views in space an
+ *     earlier scan saw through, FreeSpaceMap: no static object can give that evidence);
+ *  7. latching (`decision.latch`): a track decided mover in `decision.window` consecutive updates
+ *     stays a mover while its track lives (a car waiting at a light, a pedestrian pausing), unless
+ *     it becomes a large structure.
  *
  * Before update(), splitMergedClusters() cuts clusters that hold two established tracks moving
  * differently (walkers passing each other) along their predicted views; MoverDetector does so
@@ -113,7 +67,7 @@ inline const char* moverReasonName(MoverReason reason) {
  * is that reference point moved by the registered motion. It does not shift when a different part
  * of the object is seen, which is the point of registering instead of using centroids.
  *
- * Cost control (documented design choice, `static_refresh_frames`): an established, slow,
+ * Cost control (documented design choice, `track.static_refresh_frames`): an established, slow,
  * non-mover track whose single gated candidate's centroid moved less than `static_shift` is
  * registered only every `static_refresh_frames` frames; in between it is marked seen without a
  * Kalman update (its velocity is near zero anyway). Any centroid jump, ambiguity or speed-up
@@ -135,103 +89,9 @@ class MoverTracker {
   using Ptr = pcl::shared_ptr<MoverTracker<PointT>>;
   using ConstPtr = pcl::shared_ptr<const MoverTracker<PointT>>;
 
-  /** \brief Geometry of one cluster in the world frame. */
-  struct ClusterFeatures {
-    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-    double length = 0, width = 0, height = 0;  ///< oriented box in the horizontal plane, z extent
-    double yaw = 0;                            ///< heading of the box's long side [rad], world
-    double min_z = 0, max_z = 0;
-    int points = 0;
-    bool large = false;  ///< longer/taller than any mover: tracked by centroid, never a mover
-    /// A side of the cluster is bounded by a nearer object (see update()): its extent there is
-    /// not the object's, and its measured position can slide while it emerges or hides.
-    bool occluded = false;
-    /// What the object stands on (world z): the lowest point of a nearer object hiding its lower
-    /// part (a parked car below a walker's head), else the ground under it; NaN = unknown.
-    double floor_z = std::numeric_limits<double>::quiet_NaN();
-  };
-
-  /** \brief One track. Positions and velocities are in the world frame. */
-  struct Track {
-    int id = 0;
-    KalmanFilterCV filter;
-    double z = 0;          ///< height of the reference point (from the last measurement)
-    double last_time = 0;  ///< time of the last update
-    int hits = 0;          ///< updates so far
-    /// Born with the velocity of a coasting mover it re-acquires (see reacquire_velocity).
-    bool reacquired = false;
-    /// The velocity inherited at birth (reacquired tracks), kept apart from the filter, whose
-    /// velocity follows the centroids of the partial views until the track gets its model.
-    Eigen::Vector2d inherited_velocity = Eigen::Vector2d::Zero();
-    int occluded_run = 0;  ///< consecutive registered updates of occluded views
-    /// Centroid (x, y) and time of the first cluster held since the last update (holdClusters);
-    /// time NaN while no cluster is held.
-    Eigen::Vector3d held_from = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
-    /// Yaw [rad] that turns the track's current views onto its model (turn_yaw_samples).
-    double model_yaw = 0;
-    /// Consecutive occluded updates the velocity filter skipped (occluded_skip).
-    int skipped_run = 0;
-    /// Velocity covariance of the velocity filter when the skipped run began.
-    Eigen::Matrix2d skip_velocity_covariance = Eigen::Matrix2d::Zero();
-    int unoccluded_updates = 0;  ///< registered updates of unoccluded views so far
-    /// A view of the track was occluded (birth included): its velocity_fit_init line may hold
-    /// sliding positions.
-    bool seen_occluded = false;
-    /// (x, y, time) of the first run of kUnoccludedFitPositions consecutive registered
-    /// unoccluded positions (shorter while it is being collected).
-    Fifo<Eigen::Vector3d> unoccluded_positions;
-    int age = 0;                             ///< frames since birth
-    int missed = 0;                          ///< consecutive frames without update
-    bool mover = false;                      ///< mover decision after the last update
-    MoverReason reason = MoverReason::kNew;  ///< the test that settled `mover`
-    bool large = false;                      ///< static structure tracked by centroid
-    double similarity = 0;     ///< B of the last update (0 in centroid mode / at birth)
-    ClusterFeatures features;  ///< geometry of the last cluster assigned
-    /// Cluster centroid minus measured reference point at the last update (x, y): the reference
-    /// point stays where the object was first seen while the visible part (and so the centroid)
-    /// changes with the view, so candidates are gated against the predicted *centroid*.
-    Eigen::Vector2d centroid_offset = Eigen::Vector2d::Zero();
-    /// Tallest (not large) view of the object so far [m]: the height test of the mover decision
-    /// uses it, as a van seen from straight behind can show a lower cluster than its height.
-    double max_height = 0;
-    /// The same with views hidden from below measured down to what hides them (standingHeight()).
-    double max_standing_height = 0;
-    /// Longest (not large) view of the object so far [m]: how far from the last visible part
-    /// another part of it can reappear (see reacquire_velocity).
-    double max_length = 0;
-    Fifo<char> fast;                ///< speed > mover_speed after each of the last updates
-    Fifo<Eigen::Vector3d> history;  ///< (x, y, time) of the last measurements
-    /// (x, y, time) of the measurements of the last slow_window seconds (sustainedMotion()).
-    Fifo<Eigen::Vector3d> long_history;
-    /// (x, y, time) of the last registered measurements (manoeuvre_window of them), for the
-    /// manoeuvre test of registeredSigma().
-    Fifo<Eigen::Vector3d> registered;
-    /// Reported velocity (registration mode): a second constant-velocity filter on the registered
-    /// positions whose σ follows the registrations (registeredSigma()), while `filter`, which
-    /// gates, searches and decides, keeps the conservative range-scaled σ. Uninitialized until
-    /// the first registered update (or with measurement_sigma_from_scatter = 0).
-    KalmanFilterCV velocity_filter;
-    /// The velocity reported for the track: velocity_filter's once initialized, else filter's.
-    Eigen::Vector2d reportedVelocity() const {
-      return velocity_filter.isInitialized() ? velocity_filter.velocity() : filter.velocity();
-    }
-    SurfaceDensity::Ptr model;   ///< accumulated surface density (registration mode)
-    int since_registration = 0;  ///< cheap (unregistered) frames since the last registration
-    bool confirmed = false;      ///< latched mover (see mover_latch)
-    int mover_run = 0;           ///< consecutive updates decided mover (latched after mover_window)
-    double free_space = 0;       ///< free-space evidence of the last test (fraction seen through)
-    Fifo<char> free_votes;       ///< free-space test passed, for each of the last tests
-    /// World points of the last updates (subsampled), oldest first, for the free-space test.
-    Fifo<std::vector<Eigen::Vector3f>> past_points;
-    /// World points of the last update's view (at most kLastViewPoints), for
-    /// splitMergedClusters().
-    std::vector<Eigen::Vector3f> last_view;
-    /// last_view of the last free_space.long_lag updates, oldest first: the receding test of
-    /// sustained slow motion (slowFreeSpaceEvidence()).
-    Fifo<std::vector<Eigen::Vector3f>> past_views;
-  };
-  static_assert(std::is_nothrow_move_constructible<Track>::value,
-                "std::vector<Track> must move its tracks when it grows, not copy them (see Fifo)");
+  using ClusterFeatures = pcl_movers::ClusterFeatures;
+  using Track = pcl_movers::Track;
+  using LineFit = pcl_movers::LineFit;
   static constexpr std::size_t kLastViewPoints = 64;
   /// Unoccluded registered positions the filters restart from (see velocity_fit_init).
   static constexpr int kUnoccludedFitPositions = 3;
@@ -266,7 +126,10 @@ class MoverTracker {
   ~MoverTracker() = default;
 
   /** \brief Uses the tracker and registration entries of `parameters` (validated by the caller). */
-  void setParameters(const DetectorParameters& parameters) { parameters_ = parameters; }
+  void setParameters(const DetectorParameters& parameters) {
+    parameters_ = parameters;
+    decision_.setParameters(parameters);
+  }
   const DetectorParameters& getParameters() const { return parameters_; }
 
   /** \brief Processes one frame.
@@ -308,7 +171,10 @@ class MoverTracker {
   /** \brief Scans for the free-space test (see DetectorParameters::free_space_lag); the map must
    * already hold the current frame's scan when update() is called. nullptr (default) disables the
    * test. Not owned. */
-  void setFreeSpaceMap(const FreeSpaceMap* map) { free_space_map_ = map; }
+  void setFreeSpaceMap(const FreeSpaceMap* map) {
+    free_space_map_ = map;
+    decision_.setFreeSpaceMap(map);
+  }
   const FreeSpaceMap* getFreeSpaceMap() const { return free_space_map_; }
 
   /** \brief Per input cluster of the last update(), in input order. */
@@ -321,31 +187,6 @@ class MoverTracker {
   int getRegistrationCount() const { return registrations_; }
   /** \brief Total number of tracks ever started. */
   int getTracksStarted() const { return next_id_; }
-
-  /** \brief Least-squares line through measured positions (x, y, time), see fitVelocity(). */
-  struct LineFit {
-    bool valid = false;  ///< false with fewer than 3 positions or no time span
-    Eigen::Vector2d velocity = Eigen::Vector2d::Zero();  ///< slope of the line [m/s]
-    /// σ of the velocity per axis: `sigma` / sqrt(`time_spread`); infinite when not valid.
-    double sigma_v = std::numeric_limits<double>::infinity();
-    /// σ of one position about the line per axis (the scatter, at least the floor) [m].
-    double sigma = std::numeric_limits<double>::infinity();
-    Eigen::Vector2d mean_position = Eigen::Vector2d::Zero();  ///< centre of the line
-    double mean_time = 0;                                     ///< time of mean_position [s]
-    double time_spread = 0;                                   ///< Σ (t - mean_time)² [s²]
-    std::size_t positions = 0;
-  };
-
-  /** \brief Least-squares line through measured positions (x, y, time): its velocity, the
-   * velocity's σ (per axis) from the scatter of the positions about the line (at least
-   * `min_sigma`), and the means and spread a caller needs to restart a filter from the line. */
-  static LineFit fitVelocity(const std::vector<Eigen::Vector3d>& history, double min_sigma);
-
-  /** \brief The |v| / σ_v a line fit of `positions` positions must reach for "velocity = 0" to be
-   * rejected at `false_rate`: with σ estimated from the scatter (2 (n - 2) degrees of freedom,
-   * σ_v as LineFit::sigma_v), |v|² / (2 σ_v²) of a static object follows F(2, 2 (n - 2)), whose
-   * quantile has the closed form ν/2 · (false_rate^(-2/ν) - 1). Infinite below 3 positions. */
-  static double speedSignificanceRatio(std::size_t positions, double false_rate);
 
   /** \brief Least-squares quadratic through measured positions (x, y, time), see
    * fitAcceleration(). */
@@ -463,9 +304,6 @@ class MoverTracker {
   void seeStill(Track& track, const Candidate& candidate, ClusterResult& result);
   /** \brief Updates the track of match `m` with its cluster: filters, history, model, decision. */
   void updateTrack(const Match& m, const Frame& frame, std::vector<Candidate>& candidates);
-  /** \brief The speed vote of an update (fast_from_fit: from the line through the registered
-   * positions; else from the Kalman velocity and its covariance). */
-  void voteFast(Track& track, bool registered) const;
   /** \brief Accumulates a registered view into the track's model, or starts the model of a track
    * born too low once it is seen tall enough. */
   void updateModel(Track& track, const Match& m, const Frame& frame,
@@ -544,44 +382,6 @@ class MoverTracker {
    * true; else false (the caller updates the filter as usual). */
   bool startsFast(Track& t, const Eigen::Vector2d& measured, const Eigen::Matrix2d& meas_cov,
                   double since) const;
-  /** \brief Height of a cluster for the mover height test: its top above what it stands on
-   * (ClusterFeatures::floor_z, decision.standing_height), at least its own extent. */
-  double standingHeight(const ClusterFeatures& features) const;
-  /** \brief Whether a moving track other than `track` (a mover, confirmed, or faster than
-   * mover_speed) lies within half its longest view plus gate_margin of `track`'s position. */
-  bool besideMover(const Track& track) const;
-  /** \brief Updates the mover flag of a track after an update; `points` are the world points of
-   * the cluster just assigned (for the free-space test). */
-  void decideMover(Track& track, const std::vector<Eigen::Vector3f>& points) const;
-
-  /** \brief True when the track's motion is well determined enough for an early confirmation
-   * (see DetectorParameters::confirm_false_rate): last update registered with a high B on enough
-   * points, and the line through the window's positions faster than mover_speed and significantly
-   * non-zero. */
-  bool wellMeasuredMotion(const Track& track) const;
-  /** \brief The track's positions over the last slow_window seconds lie on a line faster than
-   * slow_speed, beyond their scatter (F-test at confirm_false_rate). */
-  bool sustainedMotion(const Track& track) const;
-  /** \brief Speed votes (mover_votes of the last mover_window updates faster than mover_speed;
-   * all of a full window for a view seen only above what hides it) and a net displacement of at
-   * least displacement_ratio of mover_speed over the window. The votes are waived for
-   * wellMeasuredMotion(). */
-  bool fastMotion(const Track& track, bool seen_standing_only, bool well_measured) const;
-
-  /** \brief Free-space evidence of a track: the larger fraction of (a) its current points seen
-   * through by the scan `free_space_lag` frames ago and (b) its oldest stored points seen through
-   * by the current scan (that view is then dropped, so every vote tests a different view). Sets
-   * track.free_space; true when it reaches free_space_min_fraction. */
-  bool freeSpaceEvidence(Track& track, const std::vector<Eigen::Vector3f>& points) const;
-  /** \brief Free-space evidence on the time scale of slow motion: the larger of (a) the
-   * fraction of the track's current points seen through by the scan free_space_long_lag frames
-   * ago (the oldest stored early in a sequence) and (b) the fraction of its view of up to
-   * free_space_long_lag updates ago (Track::past_views) seen through by the current scan
-   * reaches free_space_long_min_fraction. A walker at 0.6 m/s has moved 0.3 m in
-   * free_space_lag frames, no more than the margin, so a pass at that lag says little; over
-   * 1.5 s it has moved 0.9 m. Sets track.free_space. */
-  bool slowFreeSpaceEvidence(Track& track, const std::vector<Eigen::Vector3f>& points) const;
-
   void ensurePoints(const PointCloud& cloud, const pcl::PointIndices& indices,
                     Candidate& candidate) const;
 
@@ -601,6 +401,7 @@ class MoverTracker {
   /// Buffer of scoreByRegistration(): its gated candidates to register (distance, cluster).
   std::vector<std::pair<double, std::size_t>> to_register_;
   const FreeSpaceMap* free_space_map_ = nullptr;
+  MoverDecision decision_;  ///< the mover decision after each update
 };
 
 }  // namespace pcl_movers

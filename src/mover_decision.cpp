@@ -1,0 +1,257 @@
+/*
+ * SPDX-License-Identifier: BSD-3-Clause
+ */
+#include <pcl_movers/mover_decision.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace pcl_movers {
+
+void MoverDecision::voteFast(Track& t, bool registered) const {
+  const auto& p = parameters_;
+  if (p.decision.fast_from_fit && registered) {
+    // Fast only when a straight line fits the measured positions of the window with a speed
+    // above the threshold and well above its uncertainty, the uncertainty taken from the
+    // scatter of the positions about that line (at least the measurement σ). The Kalman
+    // velocity's σ rests on an assumed σ = measurement_sigma_per_metre·range: a pedestrian at
+    // 40 m registered to a few cm (urban) never cleared it (σ_v ≈ 0.65 m/s at 1.3 m/s) and was
+    // confirmed 20 frames late. The scatter credits precise registrations and still withholds
+    // the vote from noisy ones. Centroid measurements (centroid mode, large structures) keep the
+    // Kalman test: with their 0.3 m σ floor a 6-position line cannot tell a walker (σ_v 0.7
+    // m/s), where the filter's longer memory can (centroid-mode walkers were lost).
+    const double floor = p.track.registration_sigma;
+    const LineFit fit = fitVelocity(t.history, floor);
+    const double speed = fit.velocity.norm();
+    t.fast.push_back(fit.valid && speed > p.decision.speed &&
+                     speed > p.decision.speed_sigmas * fit.sigma_v);
+  } else {
+    // Fast only when the speed is above the threshold and well above its own uncertainty.
+    const Eigen::Vector2d v = t.filter.velocity();
+    const double speed = v.norm();
+    double sigma_v = 0;
+    if (speed > 0)
+      sigma_v =
+          std::sqrt(std::max(0.0, v.dot(t.filter.getCovariance().bottomRightCorner<2, 2>() * v)) /
+                    (speed * speed));
+    t.fast.push_back(speed > p.decision.speed && speed > p.decision.speed_sigmas * sigma_v ? 1 : 0);
+  }
+  while (static_cast<int>(t.fast.size()) > p.decision.window) t.fast.pop_front();
+}
+
+void MoverDecision::decide(Track& track, const std::vector<Eigen::Vector3f>& points,
+                           const std::vector<Track>& tracks) const {
+  const auto& p = parameters_;
+  const int run = track.mover_run;
+  track.mover = false;
+  track.reason = MoverReason::kLarge;
+  if (track.large) return;
+  if (track.confirmed && p.decision.latch) {
+    track.mover = true;
+    track.reason = MoverReason::kLatched;
+    return;
+  }
+  track.mover_run = 0;  // restored below when this update passes every test
+  // Free-space evidence is collected from the first fast update on, while the speed votes
+  // accumulate, instead of only once every kinematic test has passed: the two are independent,
+  // and waiting for one before starting the other delayed every confirmation by 1-2 frames.
+  // From the third update only: at the second, the velocity rests on the first association of a
+  // newborn track, whose birth cluster is often merged or partial (KITTI 0000: a track born on a
+  // merged cluster collected two votes at updates 2-3 and latched as a false alarm).
+  bool free_now = false;  // this update's view passed the free-space test
+  const bool slow_now = sustainedMotion(track);
+  const bool fast_now = !track.fast.empty() && track.fast.back();
+  if (track.hits >= 3 && (fast_now || slow_now)) {
+    // Evidence on the time scale of the motion: the short lag for fast motion, the long one for a
+    // sustained line (slow, or far away, where the short lag's displacement is within the
+    // range-scaled margin: a walker at 50 m moves 0.7 m in 0.5 s against a 1.0 m margin).
+    free_now = (fast_now && freeSpaceEvidence(track, points)) ||
+               (slow_now && slowFreeSpaceEvidence(track, points));
+    track.free_votes.push_back(free_now ? 1 : 0);
+    while (static_cast<int>(track.free_votes.size()) > p.decision.window)
+      track.free_votes.pop_front();
+  }
+  // Motion determined beyond doubt by the positions so far skips the vote count and the minimum
+  // age, which only exist to average out noisy velocities (see wellMeasuredMotion()).
+  // Only while the track is young (up to its first full window, mover_window + 1 positions): the
+  // early rule stands in for history a track does not have yet, not for the vote count of an
+  // established one (KITTI 0000: a parked car whose registration slipped by ~1 m over 3 s after
+  // 20 still updates passed the significance test). And the free-space evidence must come from
+  // this update's view: tests stay in free_votes for up to mover_window fast updates, which can be
+  // seconds apart, while the significance test concerns the motion of the last few frames.
+  const bool well_measured = track.hits <= p.decision.window + 1 &&
+                             (free_now || !free_space_map_ || p.free_space.lag <= 0) &&
+                             wellMeasuredMotion(track);
+  track.reason = MoverReason::kYoung;
+  if (!well_measured && track.hits < p.decision.min_age) return;
+  // The tallest view counts: a cluster's height changes with the view (a van seen from straight
+  // behind showed 0.7-0.9 m and its decision flickered around min_mover_height).
+  // A lower view counts from what it stands on (standingHeight(): the ground under it, or the
+  // object hiding it from below), unless a moving object is beside it: then it is more likely
+  // that object's own upper part, cut off by its nearer lower body (urban cars, the KITTI van: such
+  // fragments became movers with the velocity of their sliding centroid).
+  const bool seen_standing_only = track.max_height < p.decision.min_height;
+  track.reason = MoverReason::kLow;
+  if (seen_standing_only &&
+      (track.max_standing_height < p.decision.min_height || besideMover(track, tracks)))
+    return;
+  const bool fast = fastMotion(track, seen_standing_only, well_measured);
+  track.reason = MoverReason::kNoMotion;
+  if (!fast && !slow_now) return;
+  // One test can be fooled (a cluster that briefly included something else, a mixed edge);
+  // free_space_votes tests with evidence are needed, within the last mover_window tests.
+  int free_votes = 0;
+  for (const char f : track.free_votes) free_votes += f;
+  const int free_needed = well_measured
+                              ? std::min(p.decision.confirm_free_space_votes, p.free_space.votes)
+                              : p.free_space.votes;
+  track.reason = MoverReason::kNoFreeSpace;
+  if (free_space_map_ && p.free_space.lag > 0 && free_votes < free_needed) return;
+  track.mover = true;
+  track.reason = !fast                                              ? MoverReason::kSustained
+                 : well_measured && track.hits < p.decision.min_age ? MoverReason::kWellMeasured
+                                                                    : MoverReason::kFast;
+  // Latch only after a steady run of positive decisions: a brief false confirmation (a cluster
+  // that jumped to another object) must not become a mover for the rest of the track's life.
+  track.mover_run = run + 1;
+  if (track.mover_run >= p.decision.window) track.confirmed = true;
+}
+
+bool MoverDecision::wellMeasuredMotion(const Track& track) const {
+  const auto& p = parameters_;
+  if (!(p.decision.confirm_false_rate > 0) || track.large || !track.model) return false;
+  // B is 0 for centroid updates, so they never qualify; the current view must be a good match of
+  // a well-sampled object (earlier positions' quality shows in the scatter about the line).
+  if (track.similarity < p.decision.confirm_min_similarity ||
+      track.features.points < p.decision.confirm_min_points)
+    return false;
+  // A view cut by a nearer object is placed by its visible part, which slides while the object
+  // emerges or hides: its line can be straight and wrong.
+  if (track.features.occluded) return false;
+  const LineFit fit = fitVelocity(track.history, p.decision.confirm_sigma_floor);
+  if (!fit.valid) return false;
+  const double speed = fit.velocity.norm();
+  return speed > p.decision.speed &&
+         speed >=
+             speedSignificanceRatio(fit.positions, p.decision.confirm_false_rate) * fit.sigma_v;
+}
+
+bool MoverDecision::fastMotion(const Track& track, bool seen_standing_only,
+                               bool well_measured) const {
+  const auto& p = parameters_;
+  int votes = 0;
+  for (const char f : track.fast) votes += f;
+  if (!well_measured && votes < p.decision.votes) return false;
+  // Measured only down to what hides it, a track needs every speed vote of a full window: small
+  // fragments above parked cars in a real street (KITTI city, 20-50 points, 0.1-0.3 m tall)
+  // moved with their centroids' jumps and passed mover_votes of them.
+  if (seen_standing_only &&
+      (static_cast<int>(track.fast.size()) < p.decision.window || votes < p.decision.window))
+    return false;
+  const auto& first = track.history.front();
+  const auto& last = track.history.back();
+  const double elapsed = last.z() - first.z();
+  if (elapsed <= 0) return false;
+  const double displacement = (last.head<2>() - first.head<2>()).norm();
+  return displacement >= p.decision.displacement_ratio * p.decision.speed * elapsed;
+}
+
+bool MoverDecision::sustainedMotion(const Track& track) const {
+  const auto& p = parameters_;
+  // Registered positions only (a model exists): the centroids of partial views slide as the view
+  // changes, steadily enough over seconds to look like slow motion (a 0.1 m tall fragment beside
+  // the ego in KITTI city at 0.9 m/s).
+  // Five positions at least (6 degrees of freedom for the scatter): a slow track is registered
+  // only every static_refresh_frames frames while its centroid barely moves (cheap frames).
+  if (!(p.decision.slow_window > 0) || track.large || !track.model || track.long_history.size() < 5)
+    return false;
+  // The window must be mostly covered: a short run of positions is the fast test's business.
+  const double span = track.long_history.back().z() - track.long_history.front().z();
+  if (span < 0.75 * p.decision.slow_window) return false;
+  const LineFit fit = fitVelocity(track.long_history, p.track.registration_sigma);
+  if (!fit.valid) return false;
+  const double speed = fit.velocity.norm();
+  return speed > p.decision.slow_speed &&
+         speed >=
+             speedSignificanceRatio(fit.positions, p.decision.confirm_false_rate) * fit.sigma_v;
+}
+
+bool MoverDecision::freeSpaceEvidence(Track& track,
+                                      const std::vector<Eigen::Vector3f>& points) const {
+  const auto& p = parameters_;
+  track.free_space = 0;
+  if (!free_space_map_ || p.free_space.lag <= 0) return true;  // test disabled
+  // (a) approaching / crossing: the object now fills space an earlier scan saw empty. In the
+  // first frames of a sequence fewer than free_space_lag earlier scans exist, and the oldest one
+  // is used: a static object gives no evidence at any lag, and a mover that has moved less than
+  // the margin since gives none either, so only clearly moving objects are confirmed before the
+  // lag has passed (open truck, seen from frame 0: confirmed at frame 5 before, when the first
+  // lag-5 scan exists).
+  const int lag = std::min(p.free_space.lag, free_space_map_->size() - 1);
+  auto ahead = lag >= 1 ? free_space_map_->test(points, lag) : FreeSpaceMap::Evidence();
+  // (b) receding: the object's earlier surface is now seen through by the current scan.
+  FreeSpaceMap::Evidence behind;
+  // The oldest stored view is used once and dropped: each vote tests a different earlier view,
+  // so one early view with stray points (mixed pixels at an edge) cannot vote repeatedly.
+  if (track.past_points.size() > 1) {
+    behind = free_space_map_->test(track.past_points.front(), 0);
+    track.past_points.pop_front();
+  }
+  const auto score = [&](const FreeSpaceMap::Evidence& e) {
+    return e.seen_through >= p.free_space.min_points ? e.fraction() : 0.0;
+  };
+  track.free_space = std::max(score(ahead), score(behind));
+  return track.free_space >= p.free_space.min_fraction;
+}
+
+bool MoverDecision::slowFreeSpaceEvidence(Track& track,
+                                          const std::vector<Eigen::Vector3f>& points) const {
+  const auto& p = parameters_;
+  track.free_space = 0;
+  if (!free_space_map_ || p.free_space.lag <= 0) return true;  // test disabled
+  const int lag =
+      std::min(std::max(p.free_space.long_lag, p.free_space.lag), free_space_map_->size() - 1);
+  if (lag < 1) return false;
+  // (a) approaching or crossing, as in freeSpaceEvidence(), against the scan lag frames back;
+  // (b) receding: the view of up to long_lag updates back is seen through by the current scan.
+  // A walker moving away along the ray fills only space its own earlier body hid, so only (b)
+  // can show it (a group walking away at 1.3 m/s 30 m ahead: no evidence from (a) in 100 frames).
+  const auto ahead = free_space_map_->test(points, lag);
+  // Its fraction is taken over the whole earlier view, not only over the points the current
+  // scan could judge: most of a receding walker's earlier view lies in front of it now and is
+  // judged, while a view of which the current scan judges only a few points (a parked car
+  // passed at 2 m, mostly out of the beams) says little.
+  double behind = 0;
+  if (static_cast<int>(track.past_views.size()) >= p.free_space.lag) {
+    const auto& view = track.past_views.front();
+    const auto e = free_space_map_->test(view, 0);
+    if (e.seen_through >= p.free_space.min_points)
+      behind = static_cast<double>(e.seen_through) / static_cast<double>(view.size());
+  }
+  track.free_space =
+      std::max(ahead.seen_through >= p.free_space.min_points ? ahead.fraction() : 0.0, behind);
+  return track.free_space >= p.free_space.long_min_fraction;
+}
+
+double MoverDecision::standingHeight(const ClusterFeatures& f) const {
+  // Measured from what the object stands on (ClusterFeatures::floor_z): the ground under it
+  // (a sparse sensor's one or two beams across a car), or the lowest point of a nearer object
+  // hiding its lower part (a walker's head above a parked car).
+  if (!parameters_.decision.standing_height || !std::isfinite(f.floor_z)) return f.height;
+  return std::max(f.height, f.max_z - std::min(f.min_z, f.floor_z));
+}
+
+bool MoverDecision::besideMover(const Track& track, const std::vector<Track>& tracks) const {
+  const Eigen::Vector2d at = track.filter.position();
+  for (const Track& u : tracks) {
+    // Moving, confirmed or not yet: the two are decided in the same update, in either order.
+    const bool moving =
+        u.mover || u.confirmed || u.filter.velocity().norm() > parameters_.decision.speed;
+    if (u.id == track.id || u.large || !moving) continue;
+    if ((u.filter.position() - at).norm() < 0.5 * u.max_length + parameters_.track.gate_margin)
+      return true;
+  }
+  return false;
+}
+
+}  // namespace pcl_movers

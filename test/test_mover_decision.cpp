@@ -1,0 +1,207 @@
+/*
+ * SPDX-License-Identifier: BSD-3-Clause
+ */
+// The mover decision's rules on hand-made tracks, without a tracker: each named test, in order,
+// and the reason it writes.
+#include <pcl_movers/mover_decision.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+using pcl_movers::DetectorParameters;
+using pcl_movers::MoverDecision;
+using pcl_movers::MoverReason;
+using pcl_movers::Track;
+
+namespace {
+
+/// A registered 1.8 m tall track whose last `n` positions, 0.1 s apart, move at `speed` along x.
+Track movingTrack(double speed, int n) {
+  Track t;
+  t.id = 1;
+  t.model.reset(new pcl_movers::SurfaceDensity);
+  t.max_height = t.max_standing_height = 1.8;
+  t.features.height = 1.8;
+  t.features.points = 40;
+  t.similarity = 0.9;
+  for (int k = 0; k < n; ++k) {
+    const Eigen::Vector3d p(speed * 0.1 * k, 0, 0.1 * k);
+    t.history.push_back(p);
+    t.long_history.push_back(p);
+    t.registered.push_back(p);
+  }
+  t.hits = n;
+  t.age = n;
+  return t;
+}
+
+MoverDecision decisionWithoutFreeSpace() {
+  MoverDecision decision;
+  decision.setParameters(DetectorParameters());
+  return decision;  // no free-space map: the free-space tests are off
+}
+
+}  // namespace
+
+TEST(MoverDecision, VotesFastOnlyForALineFasterThanTheThresholdBeyondItsScatter) {
+  const auto decision = decisionWithoutFreeSpace();
+  Track fast = movingTrack(1.5, 6);  // exact positions: σ is the floor
+  decision.voteFast(fast, true);
+  ASSERT_EQ(fast.fast.size(), 1u);
+  EXPECT_EQ(fast.fast.back(), 1);
+  Track slow = movingTrack(0.6, 6);  // below decision.speed (1.2 m/s)
+  decision.voteFast(slow, true);
+  EXPECT_EQ(slow.fast.back(), 0);
+  // The same positions scattered ±0.6 m across the line (a far, coarsely sampled object): the
+  // fitted speed is above the threshold, but not beyond twice its σ from the scatter.
+  Track scattered = movingTrack(1.5, 6);
+  for (int k = 0; k < 6; ++k) scattered.history[k].y() = k % 2 ? -0.6 : 0.6;
+  decision.voteFast(scattered, true);
+  EXPECT_EQ(scattered.fast.back(), 0);
+}
+
+TEST(MoverDecision, TestsRunInOrderAndTheFirstFailedIsTheReason) {
+  const auto decision = decisionWithoutFreeSpace();
+  const std::vector<Track> none;
+  const std::vector<Eigen::Vector3f> points;
+  {  // large structures first
+    Track t = movingTrack(3.0, 6);
+    t.large = true;
+    decision.decide(t, points, none);
+    EXPECT_FALSE(t.mover);
+    EXPECT_EQ(t.reason, MoverReason::kLarge);
+  }
+  {  // young: fewer than decision.min_age updates, motion not beyond doubt (a scattered line)
+    Track t = movingTrack(3.0, 3);
+    t.history[1].y() = 0.3;
+    decision.decide(t, points, none);
+    EXPECT_EQ(t.reason, MoverReason::kYoung);
+  }
+  {  // low: never as tall as decision.min_height, not even from what it stands on
+    Track t = movingTrack(3.0, 6);
+    t.fast.assign(5, 1);
+    t.max_height = t.max_standing_height = 0.3;
+    decision.decide(t, points, none);
+    EXPECT_EQ(t.reason, MoverReason::kLow);
+  }
+  {  // no motion: no speed votes and no sustained line
+    Track t = movingTrack(0.0, 6);
+    t.fast.assign(5, 0);
+    decision.decide(t, points, none);
+    EXPECT_FALSE(t.mover);
+    EXPECT_EQ(t.reason, MoverReason::kNoMotion);
+  }
+  {  // fast: votes of the window and a consistent displacement
+    Track t = movingTrack(3.0, 6);
+    t.fast.assign(5, 1);
+    t.similarity = 0.5;  // not well measured: the vote rule decides
+    decision.decide(t, points, none);
+    EXPECT_TRUE(t.mover);
+    EXPECT_EQ(t.reason, MoverReason::kFast);
+  }
+}
+
+TEST(MoverDecision, FastVotesWithoutDisplacementAreNoMotion) {
+  // Speed votes from a jittering velocity, but the measurements did not get anywhere.
+  const auto decision = decisionWithoutFreeSpace();
+  Track t = movingTrack(3.0, 6);
+  t.fast.assign(5, 1);
+  t.similarity = 0.5;
+  t.history.back().x() = t.history.front().x() + 0.2;
+  decision.decide(t, {}, {});
+  EXPECT_FALSE(t.mover);
+  EXPECT_EQ(t.reason, MoverReason::kNoMotion);
+}
+
+TEST(MoverDecision, AWellMeasuredYoungTrackIsConfirmedBeforeTheMinimumAge) {
+  const auto decision = decisionWithoutFreeSpace();
+  Track t = movingTrack(8.0, 3);  // three exact registered positions at 8 m/s, B 0.9, 40 points
+  ASSERT_LT(t.hits, decision.getParameters().decision.min_age);
+  decision.decide(t, {}, {});
+  EXPECT_TRUE(t.mover);
+  EXPECT_EQ(t.reason, MoverReason::kWellMeasured);
+  // The same positions from a poor match keep waiting for the vote rule.
+  Track poor = movingTrack(8.0, 3);
+  poor.similarity = 0.5;
+  decision.decide(poor, {}, {});
+  EXPECT_EQ(poor.reason, MoverReason::kYoung);
+}
+
+TEST(MoverDecision, ASlowWalkerOnAStraightLineIsASustainedMover) {
+  // 0.6 m/s for 1.5 s (16 registered positions), below decision.speed: no speed votes.
+  const auto decision = decisionWithoutFreeSpace();
+  Track walker = movingTrack(0.6, 16);
+  walker.fast.assign(5, 0);
+  decision.decide(walker, {}, {});
+  EXPECT_TRUE(walker.mover);
+  EXPECT_EQ(walker.reason, MoverReason::kSustained);
+  // A parked car's registration wobble, as large but on no line, is not.
+  Track parked = movingTrack(0.0, 16);
+  parked.fast.assign(5, 0);
+  for (std::size_t k = 0; k < parked.long_history.size(); ++k)
+    parked.long_history[k].head<2>() =
+        Eigen::Vector2d(0.3 * std::sin(1.7 * k), 0.3 * std::cos(2.3 * k));
+  decision.decide(parked, {}, {});
+  EXPECT_FALSE(parked.mover);
+  EXPECT_EQ(parked.reason, MoverReason::kNoMotion);
+}
+
+TEST(MoverDecision, AConfirmedMoverLatchesAfterAFullWindowOfPositiveDecisions) {
+  const auto decision = decisionWithoutFreeSpace();
+  const int window = decision.getParameters().decision.window;
+  Track t = movingTrack(3.0, 6);
+  t.fast.assign(5, 1);
+  t.similarity = 0.5;
+  for (int k = 0; k < window; ++k) {
+    EXPECT_FALSE(t.confirmed) << k;
+    decision.decide(t, {}, {});
+    EXPECT_TRUE(t.mover);
+  }
+  EXPECT_TRUE(t.confirmed);
+  // Now it stays a mover while it stands still (a car waiting at a light).
+  t.fast.assign(5, 0);
+  decision.decide(t, {}, {});
+  EXPECT_TRUE(t.mover);
+  EXPECT_EQ(t.reason, MoverReason::kLatched);
+}
+
+TEST(MoverDecision, ALowViewBesideAMoverIsItsFragmentNotAMover) {
+  // Seen only above what hides it (a standing height from a nearer object below), but next to
+  // a moving track: more likely that object's own upper part than a walker behind a car.
+  const auto decision = decisionWithoutFreeSpace();
+  Track part = movingTrack(3.0, 6);
+  part.fast.assign(5, 1);
+  part.similarity = 0.5;
+  part.max_height = 0.3;
+  part.max_standing_height = 1.7;
+  decision.decide(part, {}, {});
+  EXPECT_TRUE(part.mover) << "alone, measured from what hides it, it stands tall enough";
+  Track car = movingTrack(3.0, 6);
+  car.id = 2;
+  car.max_length = 4.5;
+  car.mover = true;
+  Track beside = movingTrack(3.0, 6);
+  beside.fast.assign(5, 1);
+  beside.similarity = 0.5;
+  beside.max_height = 0.3;
+  beside.max_standing_height = 1.7;
+  decision.decide(beside, {}, {car});
+  EXPECT_FALSE(beside.mover);
+  EXPECT_EQ(beside.reason, MoverReason::kLow);
+}
+
+TEST(MoverDecision, WithAFreeSpaceMapMotionAloneIsNotEnough) {
+  // A map holding no scan has seen nothing through: kinematic evidence without free-space votes.
+  auto decision = decisionWithoutFreeSpace();
+  pcl_movers::FreeSpaceMap map;
+  decision.setFreeSpaceMap(&map);
+  Track t = movingTrack(3.0, 6);
+  t.fast.assign(5, 1);
+  t.similarity = 0.5;
+  const std::vector<Eigen::Vector3f> points = {{1.5f, 0, 0}, {1.6f, 0, 0.5f}};
+  decision.decide(t, points, {});
+  EXPECT_FALSE(t.mover);
+  EXPECT_EQ(t.reason, MoverReason::kNoFreeSpace);
+}
