@@ -3,6 +3,8 @@
  */
 #include <pcl_movers/line_fit.h>
 
+#include <Eigen/Cholesky>
+
 #include <algorithm>
 #include <cmath>
 
@@ -48,6 +50,41 @@ double speedSignificanceRatio(std::size_t positions, double false_rate) {
   // F(2, ν) has the survival function (1 + 2 f / ν)^(-ν/2), so its (1 - α) quantile is closed.
   const double f = 0.5 * dof * (std::pow(false_rate, -2.0 / dof) - 1.0);
   return std::sqrt(2.0 * f);
+}
+
+QuadraticFit fitAcceleration(const std::vector<Eigen::Vector3d>& positions, double min_sigma) {
+  QuadraticFit fit;
+  const std::size_t n = positions.size();
+  if (n < 4) return fit;  // three positions fit any quadratic exactly: no scatter to judge by
+  double mean_t = 0;
+  for (const auto& q : positions) mean_t += q.z();
+  mean_t /= static_cast<double>(n);
+  // Normal equations of the basis (1, τ, τ²/2), τ = t - mean_t (centred for conditioning).
+  Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
+  Eigen::Matrix<double, 3, 2> atb = Eigen::Matrix<double, 3, 2>::Zero();
+  for (const auto& q : positions) {
+    const double tau = q.z() - mean_t;
+    const Eigen::Vector3d row(1.0, tau, 0.5 * tau * tau);
+    ata += row * row.transpose();
+    atb += row * q.head<2>().transpose();
+  }
+  const Eigen::LDLT<Eigen::Matrix3d> ldlt(ata);
+  if (ldlt.info() != Eigen::Success || !(std::abs(ldlt.vectorD().minCoeff()) > 1e-12)) return fit;
+  const Eigen::Matrix<double, 3, 2> coef = ldlt.solve(atb);
+  double ss = 0;
+  for (const auto& q : positions) {
+    const double tau = q.z() - mean_t;
+    const Eigen::Vector3d row(1.0, tau, 0.5 * tau * tau);
+    ss += (q.head<2>() - coef.transpose() * row).squaredNorm();
+  }
+  // Per-axis σ about the quadratic: 2 (n - 3) degrees of freedom over x and y.
+  fit.sigma = std::max(min_sigma, std::sqrt(ss / (2.0 * static_cast<double>(n - 3))));
+  const double var_a = ldlt.solve(Eigen::Vector3d::UnitZ())(2);
+  if (!(var_a > 0)) return fit;
+  fit.acceleration = coef.row(2).transpose();
+  fit.sigma_a = fit.sigma * std::sqrt(var_a);
+  fit.valid = true;
+  return fit;
 }
 
 }  // namespace pcl_movers

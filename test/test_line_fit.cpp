@@ -9,6 +9,7 @@
 #include <random>
 #include <vector>
 
+using pcl_movers::fitAcceleration;
 using pcl_movers::fitVelocity;
 using pcl_movers::speedSignificanceRatio;
 
@@ -74,4 +75,31 @@ TEST(LineFit, SpeedSignificanceRatioIsTheFQuantile) {
     // Binomial σ of the rate at 20000 trials: 0.001.
     EXPECT_NEAR(static_cast<double>(rejected) / trials, alpha, 0.005) << n;
   }
+}
+
+// Hand-computed: four positions at t = 0..3 on x = t² (a = 2 m/s²) plus ε·(-1, 3, -3, 1), which is
+// orthogonal to 1, t and t² (the cubic of equally spaced points): the quadratic is exactly t², the
+// residuals are the perturbation, Σr² = 20ε² over 2·(4 - 3) degrees of freedom, so σ = ε·√10; the
+// τ²/2 column centred is (0.5, -0.5, -0.5, 0.5) with unit norm, so σ_a = σ.
+TEST(LineFit, FitAccelerationMatchesHandComputedQuadratic) {
+  const double eps = 0.1;
+  const double bump[4] = {-1, 3, -3, 1};
+  std::vector<Eigen::Vector3d> positions;
+  for (int k = 0; k < 4; ++k) positions.emplace_back(k * k + eps * bump[k], 5.0, 10.0 + k);
+  const auto fit = fitAcceleration(positions, 0.01);
+  ASSERT_TRUE(fit.valid);
+  EXPECT_NEAR(fit.acceleration.x(), 2.0, 1e-9);
+  EXPECT_NEAR(fit.acceleration.y(), 0.0, 1e-9);
+  EXPECT_NEAR(fit.sigma, eps * std::sqrt(10.0), 1e-9);
+  EXPECT_NEAR(fit.sigma_a, eps * std::sqrt(10.0), 1e-9);
+  // The floor: without the perturbation the scatter is 0 and σ is the floor.
+  for (int k = 0; k < 4; ++k) positions[k].x() = k * k;
+  const auto exact = fitAcceleration(positions, 0.05);
+  ASSERT_TRUE(exact.valid);
+  EXPECT_NEAR(exact.acceleration.x(), 2.0, 1e-9);
+  EXPECT_NEAR(exact.sigma, 0.05, 1e-12);
+  EXPECT_NEAR(exact.sigma_a, 0.05, 1e-9);
+  // Three positions fit any quadratic: not valid.
+  positions.pop_back();
+  EXPECT_FALSE(fitAcceleration(positions, 0.05).valid);
 }

@@ -807,33 +807,6 @@ TEST(MoverTracker, YoungTrackVelocityIsNotHeldByTheAccelerationLimit) {
   EXPECT_LT(error_at_7, 1.5);
 }
 
-// Hand-computed: four positions at t = 0..3 on x = t² (a = 2 m/s²) plus ε·(-1, 3, -3, 1), which is
-// orthogonal to 1, t and t² (the cubic of equally spaced points): the quadratic is exactly t², the
-// residuals are the perturbation, Σr² = 20ε² over 2·(4 - 3) degrees of freedom, so σ = ε·√10; the
-// τ²/2 column centred is (0.5, -0.5, -0.5, 0.5) with unit norm, so σ_a = σ.
-TEST(MoverTracker, FitAccelerationMatchesHandComputedQuadratic) {
-  const double eps = 0.1;
-  const double bump[4] = {-1, 3, -3, 1};
-  std::vector<Eigen::Vector3d> positions;
-  for (int k = 0; k < 4; ++k) positions.emplace_back(k * k + eps * bump[k], 5.0, 10.0 + k);
-  const auto fit = Tracker::fitAcceleration(positions, 0.01);
-  ASSERT_TRUE(fit.valid);
-  EXPECT_NEAR(fit.acceleration.x(), 2.0, 1e-9);
-  EXPECT_NEAR(fit.acceleration.y(), 0.0, 1e-9);
-  EXPECT_NEAR(fit.sigma, eps * std::sqrt(10.0), 1e-9);
-  EXPECT_NEAR(fit.sigma_a, eps * std::sqrt(10.0), 1e-9);
-  // The floor: without the perturbation the scatter is 0 and σ is the floor.
-  for (int k = 0; k < 4; ++k) positions[k].x() = k * k;
-  const auto exact = Tracker::fitAcceleration(positions, 0.05);
-  ASSERT_TRUE(exact.valid);
-  EXPECT_NEAR(exact.acceleration.x(), 2.0, 1e-9);
-  EXPECT_NEAR(exact.sigma, 0.05, 1e-12);
-  EXPECT_NEAR(exact.sigma_a, 0.05, 1e-9);
-  // Three positions fit any quadratic: not valid.
-  positions.pop_back();
-  EXPECT_FALSE(Tracker::fitAcceleration(positions, 0.05).valid);
-}
-
 // A car crossing behind an occluder (a 6 m shadow) vanishes and comes back as its front emerging
 // on the other side, far from where its rear was last seen: the new cluster is another part of
 // the object, and its positions slide while the visible part grows. Its track inherits the

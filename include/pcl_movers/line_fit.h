@@ -35,4 +35,20 @@ LineFit fitVelocity(const std::vector<Eigen::Vector3d>& history, double min_sigm
  * quantile has the closed form ν/2 · (false_rate^(-2/ν) - 1). Infinite below 3 positions. */
 double speedSignificanceRatio(std::size_t positions, double false_rate);
 
+/** \brief Least-squares quadratic through measured positions (x, y, time), see
+ * fitAcceleration(). */
+struct QuadraticFit {
+  bool valid = false;  ///< false with fewer than 4 positions or a degenerate time spread
+  Eigen::Vector2d acceleration = Eigen::Vector2d::Zero();  ///< second derivative [m/s²]
+  /// σ of the acceleration per axis, from `sigma`; infinite when not valid.
+  double sigma_a = std::numeric_limits<double>::infinity();
+  /// σ of one position about the quadratic per axis (the scatter, at least the floor) [m].
+  double sigma = std::numeric_limits<double>::infinity();
+};
+
+/** \brief Least-squares quadratic `p + v·τ + a·τ²/2` through measured positions (x, y, time):
+ * its acceleration and the acceleration's σ (per axis) from the scatter of the positions about
+ * the quadratic (at least `min_sigma`). */
+QuadraticFit fitAcceleration(const std::vector<Eigen::Vector3d>& positions, double min_sigma);
+
 }  // namespace pcl_movers

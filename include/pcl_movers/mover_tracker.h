@@ -12,6 +12,7 @@
 #include <pcl_movers/observation.h>
 #include <pcl_movers/surface_density.h>
 #include <pcl_movers/track.h>
+#include <pcl_movers/track_motion.h>
 
 #include <pcl/PointIndices.h>
 #include <pcl/point_cloud.h>
@@ -93,8 +94,6 @@ class MoverTracker {
   using Track = pcl_movers::Track;
   using LineFit = pcl_movers::LineFit;
   static constexpr std::size_t kLastViewPoints = 64;
-  /// Unoccluded registered positions the filters restart from (see velocity_fit_init).
-  static constexpr int kUnoccludedFitPositions = 3;
   /// Smallest part splitMergedClusters() cuts off, and tracks (see update()).
   static constexpr int kMinSplitPoints = 4;
 
@@ -128,6 +127,7 @@ class MoverTracker {
   /** \brief Uses the tracker and registration entries of `parameters` (validated by the caller). */
   void setParameters(const DetectorParameters& parameters) {
     parameters_ = parameters;
+    motion_.setParameters(parameters);
     decision_.setParameters(parameters);
   }
   const DetectorParameters& getParameters() const { return parameters_; }
@@ -187,23 +187,6 @@ class MoverTracker {
   int getRegistrationCount() const { return registrations_; }
   /** \brief Total number of tracks ever started. */
   int getTracksStarted() const { return next_id_; }
-
-  /** \brief Least-squares quadratic through measured positions (x, y, time), see
-   * fitAcceleration(). */
-  struct QuadraticFit {
-    bool valid = false;  ///< false with fewer than 4 positions or a degenerate time spread
-    Eigen::Vector2d acceleration = Eigen::Vector2d::Zero();  ///< second derivative [m/s²]
-    /// σ of the acceleration per axis, from `sigma`; infinite when not valid.
-    double sigma_a = std::numeric_limits<double>::infinity();
-    /// σ of one position about the quadratic per axis (the scatter, at least the floor) [m].
-    double sigma = std::numeric_limits<double>::infinity();
-  };
-
-  /** \brief Least-squares quadratic `p + v·τ + a·τ²/2` through measured positions (x, y, time):
-   * its acceleration and the acceleration's σ (per axis) from the scatter of the positions about
-   * the quadratic (at least `min_sigma`). */
-  static QuadraticFit fitAcceleration(const std::vector<Eigen::Vector3d>& positions,
-                                      double min_sigma);
 
   /** \brief Forgets all tracks. */
   void reset();
@@ -348,40 +331,6 @@ class MoverTracker {
   SurfaceDensity::Ptr makeModel(const Candidate& candidate,
                                 const Eigen::Vector3d& sensor_origin) const;
 
-  /** \brief σ [m] of a registered position `measurement` of `track` at `time` (this measurement
-   * is the newest of track.registered): the prior max(registration_sigma,
-   * measurement_sigma_per_metre · `range`), or, when the registration's B (`similarity`) is
-   * confident and the track young or manoeuvring (see
-   * DetectorParameters::measurement_sigma_from_scatter), the scatter of its recent positions
-   * (this one included) about their line, at least registration_sigma. `occluded` views (a side
-   * bounded by a nearer object) keep the prior. */
-  double registeredSigma(const Track& track, const Eigen::Vector3d& measurement, double similarity,
-                         bool occluded, double time, double range) const;
-
-  /** \brief Turns the velocity of `filter` (and its covariance) by `angle` [rad]. */
-  static void rotateVelocity(KalmanFilterCV& filter, double angle);
-
-  /** \brief Restarts the track's filters (tracking, and velocity once initialized) from the
-   * line `fit` of its positions, with that line's covariance; nothing when it is not valid. */
-  static void restartFromLine(Track& track, const LineFit& fit, double time);
-
-  /** \brief Clamps the velocity change of `filter` since `v_before` to `limit` [m/s]. */
-  static void limitAcceleration(KalmanFilterCV& filter, const Eigen::Vector2d& v_before,
-                                double limit);
-
-  /** \brief Records a registered position of `track` (after its tracking filter took it) and
-   * updates the track's velocity_filter with it; `since` [s] is the time since the last update.
-   * `reanchor`: the first update after skipped occluded views moves the filter's position to
-   * the measurement and keeps its velocity (see occluded_skip). */
-  void updateVelocityFilter(Track& track, const Eigen::Vector3d& measurement, double similarity,
-                            bool occluded, double time, double range, double since,
-                            bool reanchor = false) const;
-
-  /** \brief At a track's second view, outside its velocity prior's gate: restarts the filter
-   * from the two views (position `measured`, velocity their difference / `since`) and returns
-   * true; else false (the caller updates the filter as usual). */
-  bool startsFast(Track& t, const Eigen::Vector2d& measured, const Eigen::Matrix2d& meas_cov,
-                  double since) const;
   void ensurePoints(const PointCloud& cloud, const pcl::PointIndices& indices,
                     Candidate& candidate) const;
 
@@ -402,6 +351,7 @@ class MoverTracker {
   std::vector<std::pair<double, std::size_t>> to_register_;
   const FreeSpaceMap* free_space_map_ = nullptr;
   MoverDecision decision_;  ///< the mover decision after each update
+  TrackMotion motion_;      ///< the filters of each update
 };
 
 }  // namespace pcl_movers
