@@ -214,6 +214,27 @@ class MoverTracker {
     bool cheap = false;  ///< static track seen without registration
   };
 
+  /** \brief A track that can claim points of a merged cluster (splitMergedClusters()):
+   * established, seen in the last frames, with a view. */
+  struct Claimant {
+    std::size_t track = 0;
+    Eigen::Vector2f shift, lo, hi;  ///< predicted motion of its view, the moved view's box
+    LineFit fit;                    ///< line through its last positions (claimantsDiffer())
+  };
+  /** \brief The tracks that can claim points this frame, their views moved to `time`. */
+  std::vector<Claimant> findClaimants(double time) const;
+  /** \brief Whether two claimants move differently beyond doubt, one a confirmed mover and the
+   * other confirmed or static. */
+  bool claimantsDiffer(const Claimant& a, const Claimant& b) const;
+  /** \brief (index into `ids`, squared distance) of the claimant among `ids` whose moved view
+   * lies nearest to `q` in the horizontal plane. */
+  std::pair<std::size_t, float> nearestView(const PointT& q, const std::vector<Claimant>& claimants,
+                                            const std::vector<std::size_t>& ids) const;
+  /** \brief The pieces of the cluster `idx` claimed by tracks that move differently (positions
+   * in `idx`, each at least kMinSplitPoints), or none when it stays whole. */
+  std::vector<ClusterPart> cutCluster(const PointCloud& cloud, const pcl::Indices& idx,
+                                      const std::vector<Claimant>& claimants) const;
+
   /** \brief Where a track looks for its object this frame (association). */
   struct TrackGate {
     std::size_t track = 0;

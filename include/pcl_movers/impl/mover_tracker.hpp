@@ -239,12 +239,43 @@ std::vector<typename MoverTracker<PointT>::ClusterPart> MoverTracker<PointT>::sp
   const auto& p = parameters_;
   std::vector<ClusterPart> parts;
   if (!p.track.split_merged || !has_time_ || p.track.mode == "centroid") return parts;
-  // Tracks that can claim: established, seen in the last frame, with a view.
-  struct Claimant {
-    std::size_t track;
-    Eigen::Vector2f shift, lo, hi;  // predicted motion of the view, its moved bounding box
-    LineFit fit;                    // line through the last positions (see below)
+  const std::vector<Claimant> claimants = findClaimants(time);
+  if (claimants.size() < 2 ||
+      std::none_of(claimants.begin(), claimants.end(),
+                   [&](const Claimant& c) { return tracks_[c.track].confirmed; }))
+    return parts;
+  const auto addWhole = [&](std::size_t b) {
+    ClusterPart whole;
+    whole.cluster = static_cast<int>(b);
+    whole.positions.resize(observations[b].indices.indices.size());
+    std::iota(whole.positions.begin(), whole.positions.end(), 0);
+    parts.push_back(std::move(whole));
   };
+  bool any_split = false;
+  for (std::size_t c = 0; c < observations.size(); ++c) {
+    const pcl::Indices& idx = observations[c].indices.indices;
+    std::vector<ClusterPart> pieces = cutCluster(cloud, idx, claimants);
+    if (pieces.empty()) {
+      if (any_split) addWhole(c);
+      continue;
+    }
+    if (!any_split) {
+      // First split: the clusters before it become whole parts.
+      any_split = true;
+      for (std::size_t b = 0; b < c; ++b) addWhole(b);
+    }
+    for (auto& piece : pieces) {
+      piece.cluster = static_cast<int>(c);
+      parts.push_back(std::move(piece));
+    }
+  }
+  return parts;
+}
+
+template <typename PointT>
+std::vector<typename MoverTracker<PointT>::Claimant> MoverTracker<PointT>::findClaimants(
+    double time) const {
+  const auto& p = parameters_;
   std::vector<Claimant> claimants;
   for (std::size_t ti = 0; ti < tracks_.size(); ++ti) {
     const Track& t = tracks_[ti];
@@ -262,10 +293,12 @@ std::vector<typename MoverTracker<PointT>::ClusterPart> MoverTracker<PointT>::sp
     c.fit = fitVelocity(t.history, p.track.registration_sigma);
     claimants.push_back(c);
   }
-  if (claimants.size() < 2 ||
-      std::none_of(claimants.begin(), claimants.end(),
-                   [&](const Claimant& c) { return tracks_[c.track].confirmed; }))
-    return parts;
+  return claimants;
+}
+
+template <typename PointT>
+bool MoverTracker<PointT>::claimantsDiffer(const Claimant& a, const Claimant& b) const {
+  const auto& p = parameters_;
   // Moving differently, beyond doubt: fragments of one object share its velocity and are left
   // merged, and so are tracks whose velocities are too uncertain to tell. Each velocity is the
   // line through the track's last positions with σ from their scatter, as in the mover votes
@@ -273,121 +306,97 @@ std::vector<typename MoverTracker<PointT>::ClusterPart> MoverTracker<PointT>::sp
   // sliding positions scattered as much, while two walkers passing each other had precise lines
   // 1.9 m/s apart. And one of them must be a confirmed mover: a static object and a young track
   // that a few registrations made look fast would otherwise keep splitting each other (KITTI).
-  const auto differ = [&](const Claimant& a, const Claimant& b) {
-    if (!a.fit.valid || !b.fit.valid) return false;
-    if (!tracks_[a.track].confirmed && !tracks_[b.track].confirmed) return false;
-    // The other one a confirmed mover too, or static: an unconfirmed moving track next to a
-    // mover is usually a fragment of it (KITTI van) whose velocity has drifted.
-    const auto settled = [&](const Claimant& c) {
-      return tracks_[c.track].confirmed || c.fit.velocity.norm() < 0.5 * p.decision.speed;
-    };
-    if (!settled(a) || !settled(b)) return false;
-    const double dv = (a.fit.velocity - b.fit.velocity).norm();
-    const double sigma = std::sqrt(a.fit.sigma_v * a.fit.sigma_v + b.fit.sigma_v * b.fit.sigma_v);
-    return dv >= p.track.split_min_speed_difference && dv > p.track.gate_sigmas * sigma;
+  if (!a.fit.valid || !b.fit.valid) return false;
+  if (!tracks_[a.track].confirmed && !tracks_[b.track].confirmed) return false;
+  // The other one a confirmed mover too, or static: an unconfirmed moving track next to a
+  // mover is usually a fragment of it (KITTI van) whose velocity has drifted.
+  const auto settled = [&](const Claimant& c) {
+    return tracks_[c.track].confirmed || c.fit.velocity.norm() < 0.5 * p.decision.speed;
   };
-  const float claim = static_cast<float>(p.track.split_claim_distance);
-  const float claim2 = claim * claim;
-  // (index into `ids`, squared distance) of the claimant among `ids` whose moved view lies
-  // nearest to q in the horizontal plane.
-  const auto nearestView = [&](const PointT& q, const std::vector<std::size_t>& ids) {
-    std::pair<std::size_t, float> nearest(0, std::numeric_limits<float>::max());
-    for (std::size_t k = 0; k < ids.size(); ++k) {
-      const Claimant& cl = claimants[ids[k]];
-      for (const auto& v : tracks_[cl.track].last_view) {
-        const float dx = q.x - (v.x() + cl.shift.x()), dy = q.y - (v.y() + cl.shift.y());
-        const float d2 = dx * dx + dy * dy;
-        if (d2 < nearest.second) nearest = {k, d2};
-      }
+  if (!settled(a) || !settled(b)) return false;
+  const double dv = (a.fit.velocity - b.fit.velocity).norm();
+  const double sigma = std::sqrt(a.fit.sigma_v * a.fit.sigma_v + b.fit.sigma_v * b.fit.sigma_v);
+  return dv >= p.track.split_min_speed_difference && dv > p.track.gate_sigmas * sigma;
+}
+
+template <typename PointT>
+std::pair<std::size_t, float> MoverTracker<PointT>::nearestView(
+    const PointT& q, const std::vector<Claimant>& claimants,
+    const std::vector<std::size_t>& ids) const {
+  std::pair<std::size_t, float> nearest(0, std::numeric_limits<float>::max());
+  for (std::size_t k = 0; k < ids.size(); ++k) {
+    const Claimant& cl = claimants[ids[k]];
+    for (const auto& v : tracks_[cl.track].last_view) {
+      const float dx = q.x - (v.x() + cl.shift.x()), dy = q.y - (v.y() + cl.shift.y());
+      const float d2 = dx * dx + dy * dy;
+      if (d2 < nearest.second) nearest = {k, d2};
     }
-    return nearest;
-  };
-  const auto addWhole = [&](std::size_t b) {
-    ClusterPart whole;
-    whole.cluster = static_cast<int>(b);
-    whole.positions.resize(observations[b].indices.indices.size());
-    std::iota(whole.positions.begin(), whole.positions.end(), 0);
-    parts.push_back(std::move(whole));
-  };
-  bool any_split = false;
-  std::vector<std::size_t> near;
-  for (std::size_t c = 0; c < observations.size(); ++c) {
-    const auto& idx = observations[c].indices.indices;
-    // Cheap rejection by bounding boxes, of an even subsample of at most 64 points (this runs
-    // on every cluster of the frame; the claim margin covers what the subsample misses).
-    Eigen::Vector2f lo = Eigen::Vector2f::Constant(std::numeric_limits<float>::max()), hi = -lo;
-    const std::size_t step = std::max<std::size_t>(1, idx.size() / 64);
-    for (std::size_t j = 0; j < idx.size(); j += step) {
-      const auto& q = cloud[idx[j]];
-      if (!std::isfinite(q.x) || !std::isfinite(q.y)) continue;
-      lo = lo.cwiseMin(Eigen::Vector2f(q.x, q.y));
-      hi = hi.cwiseMax(Eigen::Vector2f(q.x, q.y));
-    }
-    near.clear();
-    // Structures longer than any mover are not split (and would cost the most to test).
-    const bool mover_sized = (hi - lo).maxCoeff() <= p.decision.max_length + 2 * claim;
-    for (std::size_t k = 0; mover_sized && k < claimants.size(); ++k) {
-      const auto& cl = claimants[k];
-      if ((cl.lo.array() - claim <= hi.array()).all() &&
-          (lo.array() <= cl.hi.array() + claim).all())
-        near.push_back(k);
-    }
-    bool split = false;
-    // The cheap test first (most clusters near two tracks are static neighbours).
-    bool some_differ = false;
-    for (std::size_t a = 0; a < near.size() && !some_differ; ++a)
-      for (std::size_t b = a + 1; b < near.size() && !some_differ; ++b)
-        some_differ = differ(claimants[near[a]], claimants[near[b]]);
-    if (some_differ && static_cast<int>(idx.size()) >= 2 * kMinSplitPoints) {
-      // Claims, on an even subsample of at most 128 points (each counts for `sample` points):
-      // each point to the nearest moved view among the nearby tracks, counted when within
-      // split_claim_distance of it.
-      const std::size_t sample = std::max<std::size_t>(1, idx.size() / 128);
-      std::vector<int> claimed(near.size(), 0);
-      for (std::size_t j = 0; j < idx.size(); j += sample) {
-        const auto& q = cloud[idx[j]];
-        if (!std::isfinite(q.x) || !std::isfinite(q.y)) continue;
-        const auto nearest = nearestView(q, near);
-        if (nearest.second <= claim2) claimed[nearest.first] += static_cast<int>(sample);
-      }
-      std::vector<std::size_t> claimers;
-      for (std::size_t k = 0; k < near.size(); ++k)
-        if (claimed[k] >= kMinSplitPoints) claimers.push_back(k);
-      bool moving_differently = false;
-      for (std::size_t a = 0; a < claimers.size(); ++a)
-        for (std::size_t b = a + 1; b < claimers.size(); ++b)
-          moving_differently = moving_differently ||
-                               differ(claimants[near[claimers[a]]], claimants[near[claimers[b]]]);
-      if (claimers.size() >= 2 && moving_differently) {
-        // Points go to the nearest claimer only (views of non-claimers do not compete).
-        std::vector<std::size_t> claimer_ids(claimers.size());
-        for (std::size_t a = 0; a < claimers.size(); ++a) claimer_ids[a] = near[claimers[a]];
-        std::vector<ClusterPart> pieces(claimers.size());
-        for (std::size_t j = 0; j < idx.size(); ++j) {
-          const auto& q = cloud[idx[j]];
-          const std::size_t arg =
-              std::isfinite(q.x) && std::isfinite(q.y) ? nearestView(q, claimer_ids).first : 0;
-          pieces[arg].positions.push_back(static_cast<int>(j));
-        }
-        split = std::all_of(pieces.begin(), pieces.end(), [&](const ClusterPart& piece) {
-          return static_cast<int>(piece.positions.size()) >= kMinSplitPoints;
-        });
-        if (split) {
-          if (!any_split) {
-            // First split: the clusters before it become whole parts.
-            any_split = true;
-            for (std::size_t b = 0; b < c; ++b) addWhole(b);
-          }
-          for (auto& piece : pieces) {
-            piece.cluster = static_cast<int>(c);
-            parts.push_back(std::move(piece));
-          }
-        }
-      }
-    }
-    if (any_split && !split) addWhole(c);
   }
-  return parts;
+  return nearest;
+}
+
+template <typename PointT>
+std::vector<typename MoverTracker<PointT>::ClusterPart> MoverTracker<PointT>::cutCluster(
+    const PointCloud& cloud, const pcl::Indices& idx,
+    const std::vector<Claimant>& claimants) const {
+  const auto& p = parameters_;
+  const float claim = static_cast<float>(p.track.split_claim_distance);
+  // Cheap rejection by bounding boxes, of an even subsample of at most 64 points (this runs on
+  // every cluster of the frame; the claim margin covers what the subsample misses).
+  Eigen::Vector2f lo = Eigen::Vector2f::Constant(std::numeric_limits<float>::max()), hi = -lo;
+  const std::size_t step = std::max<std::size_t>(1, idx.size() / 64);
+  for (std::size_t j = 0; j < idx.size(); j += step) {
+    const auto& q = cloud[idx[j]];
+    if (!std::isfinite(q.x) || !std::isfinite(q.y)) continue;
+    lo = lo.cwiseMin(Eigen::Vector2f(q.x, q.y));
+    hi = hi.cwiseMax(Eigen::Vector2f(q.x, q.y));
+  }
+  // Structures longer than any mover are not split (and would cost the most to test).
+  if (!((hi - lo).maxCoeff() <= p.decision.max_length + 2 * claim)) return {};
+  std::vector<std::size_t> near;
+  for (std::size_t k = 0; k < claimants.size(); ++k) {
+    const auto& cl = claimants[k];
+    if ((cl.lo.array() - claim <= hi.array()).all() && (lo.array() <= cl.hi.array() + claim).all())
+      near.push_back(k);
+  }
+  // Some pair of the tracks nearby moves differently (the cheap test first: most clusters near
+  // two tracks are static neighbours), and those that claim the cluster do too.
+  const auto anyPairDiffers = [&](const std::vector<std::size_t>& ids) {
+    for (std::size_t a = 0; a < ids.size(); ++a)
+      for (std::size_t b = a + 1; b < ids.size(); ++b)
+        if (claimantsDiffer(claimants[ids[a]], claimants[ids[b]])) return true;
+    return false;
+  };
+  if (!anyPairDiffers(near) || static_cast<int>(idx.size()) < 2 * kMinSplitPoints) return {};
+  // Claims, on an even subsample of at most 128 points (each counts for `sample` points): each
+  // point to the nearest moved view among the nearby tracks, counted when within
+  // split_claim_distance of it.
+  const std::size_t sample = std::max<std::size_t>(1, idx.size() / 128);
+  std::vector<int> claimed(near.size(), 0);
+  for (std::size_t j = 0; j < idx.size(); j += sample) {
+    const auto& q = cloud[idx[j]];
+    if (!std::isfinite(q.x) || !std::isfinite(q.y)) continue;
+    const auto nearest = nearestView(q, claimants, near);
+    if (nearest.second <= claim * claim) claimed[nearest.first] += static_cast<int>(sample);
+  }
+  std::vector<std::size_t> claimers;
+  for (std::size_t k = 0; k < near.size(); ++k)
+    if (claimed[k] >= kMinSplitPoints) claimers.push_back(near[k]);
+  if (claimers.size() < 2 || !anyPairDiffers(claimers)) return {};
+  // Points go to the nearest claimer only (views of non-claimers do not compete).
+  std::vector<ClusterPart> pieces(claimers.size());
+  for (std::size_t j = 0; j < idx.size(); ++j) {
+    const auto& q = cloud[idx[j]];
+    const std::size_t arg =
+        std::isfinite(q.x) && std::isfinite(q.y) ? nearestView(q, claimants, claimers).first : 0;
+    pieces[arg].positions.push_back(static_cast<int>(j));
+  }
+  const bool all_large_enough =
+      std::all_of(pieces.begin(), pieces.end(), [&](const ClusterPart& piece) {
+        return static_cast<int>(piece.positions.size()) >= kMinSplitPoints;
+      });
+  if (!all_large_enough) return {};
+  return pieces;
 }
 
 template <typename PointT>
