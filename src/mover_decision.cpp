@@ -73,19 +73,19 @@ void MoverDecision::decide(Track& track, const std::vector<Eigen::Vector3f>& poi
   }
   // Motion determined beyond doubt by the positions so far skips the vote count and the minimum
   // age, which only exist to average out noisy velocities (see wellMeasuredMotion()).
-  // Only while the track is young (up to its first full window, mover_window + 1 positions): the
+  // Only while the track is young (up to its first full window, decision.window + 1 positions): the
   // early rule stands in for history a track does not have yet, not for the vote count of an
   // established one (KITTI 0000: a parked car whose registration slipped by ~1 m over 3 s after
   // 20 still updates passed the significance test). And the free-space evidence must come from
-  // this update's view: tests stay in free_votes for up to mover_window fast updates, which can be
-  // seconds apart, while the significance test concerns the motion of the last few frames.
+  // this update's view: tests stay in free_votes for up to decision.window fast updates, which can
+  // be seconds apart, while the significance test concerns the motion of the last few frames.
   const bool well_measured = track.hits <= p.decision.window + 1 &&
                              (free_now || !free_space_map_ || p.free_space.lag <= 0) &&
                              wellMeasuredMotion(track);
   track.reason = MoverReason::kYoung;
   if (!well_measured && track.hits < p.decision.min_age) return;
   // The tallest view counts: a cluster's height changes with the view (a van seen from straight
-  // behind showed 0.7-0.9 m and its decision flickered around min_mover_height).
+  // behind showed 0.7-0.9 m and its decision flickered around decision.min_height).
   // A lower view counts from what it stands on (standingHeight(): the ground under it, or the
   // object hiding it from below), unless a moving object is beside it: then it is more likely
   // that object's own upper part, cut off by its nearer lower body (urban cars, the KITTI van: such
@@ -99,7 +99,7 @@ void MoverDecision::decide(Track& track, const std::vector<Eigen::Vector3f>& poi
   track.reason = MoverReason::kNoMotion;
   if (!fast && !slow_now) return;
   // One test can be fooled (a cluster that briefly included something else, a mixed edge);
-  // free_space_votes tests with evidence are needed, within the last mover_window tests.
+  // free_space.votes tests with evidence are needed, within the last decision.window tests.
   int free_votes = 0;
   for (const char f : track.free_votes) free_votes += f;
   const int free_needed = well_measured
@@ -144,7 +144,7 @@ bool MoverDecision::fastMotion(const Track& track, bool seen_standing_only,
   if (!well_measured && votes < p.decision.votes) return false;
   // Measured only down to what hides it, a track needs every speed vote of a full window: small
   // fragments above parked cars in a real street (KITTI city, 20-50 points, 0.1-0.3 m tall)
-  // moved with their centroids' jumps and passed mover_votes of them.
+  // moved with their centroids' jumps and passed decision.votes of them.
   if (seen_standing_only &&
       (static_cast<int>(track.fast.size()) < p.decision.window || votes < p.decision.window))
     return false;
@@ -182,7 +182,7 @@ bool MoverDecision::freeSpaceEvidence(Track& track,
   track.free_space = 0;
   if (!free_space_map_ || p.free_space.lag <= 0) return true;  // test disabled
   // (a) approaching / crossing: the object now fills space an earlier scan saw empty. In the
-  // first frames of a sequence fewer than free_space_lag earlier scans exist, and the oldest one
+  // first frames of a sequence fewer than free_space.lag earlier scans exist, and the oldest one
   // is used: a static object gives no evidence at any lag, and a mover that has moved less than
   // the margin since gives none either, so only clearly moving objects are confirmed before the
   // lag has passed (open truck, seen from frame 0: confirmed at frame 5 before, when the first

@@ -240,7 +240,7 @@ double TrackMotion::registeredSigma(const Track& track, const Eigen::Vector3d& m
         !(quadratic.acceleration.norm() > p.track.manoeuvre_sigmas * quadratic.sigma_a))
       return prior;
   }
-  Fifo<Eigen::Vector3d> positions = track.history;  // at most mover_window + 1
+  Fifo<Eigen::Vector3d> positions = track.history;  // at most decision.window + 1
   positions.emplace_back(measurement.x(), measurement.y(), time);
   while (static_cast<int>(positions.size()) > p.decision.window + 1) positions.pop_front();
   // Four positions leave 4 degrees of freedom for the scatter; with fewer it is a guess.

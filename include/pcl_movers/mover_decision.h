@@ -38,7 +38,7 @@ class MoverDecision {
    * (ClusterFeatures::floor_z, decision.standing_height), at least its own extent. */
   double standingHeight(const ClusterFeatures& features) const;
   /** \brief Whether a moving track other than `track` (a mover, confirmed, or faster than
-   * mover_speed) lies within half its longest view plus gate_margin of `track`'s position. */
+   * decision.speed) lies within half its longest view plus gate_margin of `track`'s position. */
   bool besideMover(const Track& track, const std::vector<Track>& tracks) const;
   /** \brief Decides whether `track` is a mover after an update (Track::mover, and the test that
    * settled it, Track::reason); `points` are the world points of the cluster just assigned (the
@@ -48,29 +48,29 @@ class MoverDecision {
 
   /** \brief True when the track's motion is well determined enough for an early confirmation
    * (see DetectorParameters::confirm_false_rate): last update registered with a high B on enough
-   * points, and the line through the window's positions faster than mover_speed and significantly
-   * non-zero. */
+   * points, and the line through the window's positions faster than decision.speed and
+   * significantly non-zero. */
   bool wellMeasuredMotion(const Track& track) const;
   /** \brief The track's positions over the last slow_window seconds lie on a line faster than
    * slow_speed, beyond their scatter (F-test at confirm_false_rate). */
   bool sustainedMotion(const Track& track) const;
-  /** \brief Speed votes (mover_votes of the last mover_window updates faster than mover_speed;
-   * all of a full window for a view seen only above what hides it) and a net displacement of at
-   * least displacement_ratio of mover_speed over the window. The votes are waived for
-   * wellMeasuredMotion(). */
+  /** \brief Speed votes (decision.votes of the last decision.window updates faster than
+   * decision.speed; all of a full window for a view seen only above what hides it) and a net
+   * displacement of at least displacement_ratio of decision.speed over the window. The votes are
+   * waived for wellMeasuredMotion(). */
   bool fastMotion(const Track& track, bool seen_standing_only, bool well_measured) const;
 
   /** \brief Free-space evidence of a track: the larger fraction of (a) its current points seen
-   * through by the scan `free_space_lag` frames ago and (b) its oldest stored points seen through
+   * through by the scan `free_space.lag` frames ago and (b) its oldest stored points seen through
    * by the current scan (that view is then dropped, so every vote tests a different view). Sets
-   * track.free_space; true when it reaches free_space_min_fraction. */
+   * track.free_space; true when it reaches free_space.min_fraction. */
   bool freeSpaceEvidence(Track& track, const std::vector<Eigen::Vector3f>& points) const;
   /** \brief Free-space evidence on the time scale of slow motion: the larger of (a) the
-   * fraction of the track's current points seen through by the scan free_space_long_lag frames
+   * fraction of the track's current points seen through by the scan free_space.long_lag frames
    * ago (the oldest stored early in a sequence) and (b) the fraction of its view of up to
-   * free_space_long_lag updates ago (Track::past_views) seen through by the current scan
-   * reaches free_space_long_min_fraction. A walker at 0.6 m/s has moved 0.3 m in
-   * free_space_lag frames, no more than the margin, so a pass at that lag says little; over
+   * free_space.long_lag updates ago (Track::past_views) seen through by the current scan
+   * reaches free_space.long_min_fraction. A walker at 0.6 m/s has moved 0.3 m in
+   * free_space.lag frames, no more than the margin, so a pass at that lag says little; over
    * 1.5 s it has moved 0.9 m. Sets track.free_space. */
   bool slowFreeSpaceEvidence(Track& track, const std::vector<Eigen::Vector3f>& points) const;
 

@@ -34,22 +34,24 @@ namespace pcl_movers {
  *
  *  1. predict all tracks to the frame time;
  *  2. gate: a cluster is a candidate of a track when its centroid lies within
- *     `gate_sigmas`·σ (innovation covariance) + ½·`acceleration_limit`·dt² + `gate_margin` of the
- *     predicted centroid (predicted reference point + the centroid offset of the last update),
- *     at most `max_gate_radius` (the acceleration limit bounds the search);
+ *     `track.gate_sigmas`·σ (innovation covariance) + ½·`track.acceleration_limit`·dt²
+ *     + `track.gate_margin` of the predicted centroid (predicted reference point + the
+ *     centroid offset of the last update), at most `track.max_gate_radius` (the acceleration
+ *     limit bounds the search);
  *  3. registration mode: each candidate is registered with BhattacharyaRegistration against the
  *     track's model, the search window centred on the prediction and as wide as the gate; its
- *     similarity B is the association score and B < `min_similarity` is not an update (occlusion
- *     or wrong object). Centroid mode (the paper's "simplest approach", for comparison): the
- *     measurement is the cluster centroid and the score is minus the centroid distance;
+ *     similarity B is the association score and B < `registration.min_similarity` is not an
+ *     update (occlusion or wrong object). Centroid mode (the paper's "simplest approach", for
+ *     comparison): the measurement is the cluster centroid and the score is minus the centroid
+ *     distance;
  *  4. pairs are assigned greedily, best score first, one cluster per track and one track per
  *     cluster; the Kalman filter is updated with the measured position; the registered view is
- *     accumulated into the model with a half-life of `model_half_life` frames;
- *  5. unmatched tracks coast (prediction only) and are deleted after `max_missed_frames`; a
+ *     accumulated into the model with a half-life of `registration.model_half_life` frames;
+ *  5. unmatched tracks coast (prediction only) and are deleted after `track.max_missed_frames`; a
  *     confirmed mover holds a cluster near its prediction that failed to register, and after
- *     `max_missed_frames` such frames restarts its model from it when the held clusters moved
- *     along its path (reanchorTrack()); unmatched clusters start new tracks (at most
- *     `max_tracks` live tracks);
+ *     `track.max_missed_frames` such frames restarts its model from it when the held clusters
+ *     moved along its path (reanchorTrack()); unmatched clusters start new tracks (at most
+ *     `track.max_tracks` live tracks);
  *  6. mover decision (MoverDecision, after every update): named tests in order, the first one
  *     failed is the reason written per row — large, latched, young (< `decision.min_age` updates
  *     unless the motion is beyond doubt), low (never `decision.min_height` tall), no_motion
@@ -61,7 +63,7 @@ namespace pcl_movers {
  *
  * Before update(), splitMergedClusters() cuts clusters that hold two established tracks moving
  * differently (walkers passing each other) along their predicted views; MoverDetector does so
- * every frame (`split_merged`).
+ * every frame (`track.split_merged`).
  *
  * The registered measurement is the track's reference point: the model grid is centred where the
  * object was first seen and the registration maps each new view onto it, so the measured position
@@ -69,17 +71,18 @@ namespace pcl_movers {
  * of the object is seen, which is the point of registering instead of using centroids.
  *
  * Cost control (documented design choice, `track.static_refresh_frames`): an established, slow,
- * non-mover track whose single gated candidate's centroid moved less than `static_shift` is
- * registered only every `static_refresh_frames` frames; in between it is marked seen without a
- * Kalman update (its velocity is near zero anyway). Any centroid jump, ambiguity or speed-up
- * brings registration back at once. `static_refresh_frames = 1` registers every track every frame,
- * as in the paper.
+ * non-mover track whose single gated candidate's centroid moved less than `track.static_shift` is
+ * registered only every `track.static_refresh_frames` frames; in between it is marked seen without
+ * a Kalman update (its velocity is near zero anyway). Any centroid jump, ambiguity or speed-up
+ * brings registration back at once. `track.static_refresh_frames` = 1 registers every track every
+ * frame, as in the paper.
  *
- * Practical limits (documented design choices): clusters longer than `max_mover_length` or taller
- * than `max_mover_height` (buildings, walls, hedges, tree rows) are tracked by centroid only and
- * are never movers — registering them would be expensive and their centroids move with the view;
- * clusters lower than `min_mover_height` are never movers. Tracks and models are bounded: each
- * track owns one fixed-size grid, tracks die after `max_missed_frames` and their number is capped.
+ * Practical limits (documented design choices): clusters longer than `decision.max_length` or
+ * taller than `decision.max_height` (buildings, walls, hedges, tree rows) are tracked by centroid
+ * only and are never movers — registering them would be expensive and their centroids move with the
+ * view; clusters lower than `decision.min_height` are never movers. Tracks and models are bounded:
+ * each track owns one fixed-size grid, tracks die after `track.max_missed_frames` and their number
+ * is capped.
  */
 template <typename PointT>
 class MoverTracker {

@@ -31,14 +31,14 @@ class Fifo : public std::vector<T> {
 enum class MoverReason : std::uint8_t {
   kNew,           ///< seen once: no motion measured yet
   kLarge,         ///< larger than any mover: static structure, tracked by its centroid
-  kYoung,         ///< fewer than mover_min_age updates and its motion not yet beyond doubt
-  kLow,           ///< lower than min_mover_height in every view
+  kYoung,         ///< fewer than decision.min_age updates and its motion not yet beyond doubt
+  kLow,           ///< lower than decision.min_height in every view
   kNoMotion,      ///< neither fast motion (speed votes) nor sustained slow motion
   kNoFreeSpace,   ///< moves, but too few of its views fall in space earlier scans saw empty
   kFast,          ///< mover: speed votes and free-space evidence
   kWellMeasured,  ///< mover while young: its displacement beyond doubt and seen through
   kSustained,     ///< mover: sustained slow motion (slow_window) and free-space evidence
-  kLatched        ///< mover: confirmed by mover_window decisions in a row (mover_latch)
+  kLatched        ///< mover: confirmed by decision.window decisions in a row (decision.latch)
 };
 
 /** \brief The name of a reason as tracks.csv writes it: new, large, young, low, no_motion,
@@ -114,7 +114,7 @@ struct Track {
   /// Longest (not large) view of the object so far [m]: how far from the last visible part
   /// another part of it can reappear (see reacquire_velocity).
   double max_length = 0;
-  Fifo<char> fast;                ///< speed > mover_speed after each of the last updates
+  Fifo<char> fast;                ///< speed > decision.speed after each of the last updates
   Fifo<Eigen::Vector3d> history;  ///< (x, y, time) of the last measurements
   /// (x, y, time) of the measurements of the last slow_window seconds (sustainedMotion()).
   Fifo<Eigen::Vector3d> long_history;
@@ -132,10 +132,10 @@ struct Track {
   }
   SurfaceDensity::Ptr model;   ///< accumulated surface density (registration mode)
   int since_registration = 0;  ///< cheap (unregistered) frames since the last registration
-  bool confirmed = false;      ///< latched mover (see mover_latch)
-  int mover_run = 0;           ///< consecutive updates decided mover (latched after mover_window)
-  double free_space = 0;       ///< free-space evidence of the last test (fraction seen through)
-  Fifo<char> free_votes;       ///< free-space test passed, for each of the last tests
+  bool confirmed = false;      ///< latched mover (see decision.latch)
+  int mover_run = 0;      ///< consecutive updates decided mover (latched after decision.window)
+  double free_space = 0;  ///< free-space evidence of the last test (fraction seen through)
+  Fifo<char> free_votes;  ///< free-space test passed, for each of the last tests
   /// World points of the last updates (subsampled), oldest first, for the free-space test.
   Fifo<std::vector<Eigen::Vector3f>> past_points;
   /// World points of the last update's view (at most kLastViewPoints), for
