@@ -117,6 +117,16 @@ void MoverDecision::decide(Track& track, const std::vector<Eigen::Vector3f>& poi
   if (track.mover_run >= p.decision.window) track.confirmed = true;
 }
 
+bool MoverDecision::significantLine(const std::vector<Eigen::Vector3d>& positions, double min_sigma,
+                                    double min_speed) const {
+  const LineFit fit = fitVelocity(positions, min_sigma);
+  if (!fit.valid) return false;
+  const double speed = fit.velocity.norm();
+  return speed > min_speed &&
+         speed >= speedSignificanceRatio(fit.positions, parameters_.decision.confirm_false_rate) *
+                      fit.sigma_v;
+}
+
 bool MoverDecision::wellMeasuredMotion(const Track& track) const {
   const auto& p = parameters_;
   if (!(p.decision.confirm_false_rate > 0) || track.large || !track.model) return false;
@@ -128,12 +138,7 @@ bool MoverDecision::wellMeasuredMotion(const Track& track) const {
   // A view cut by a nearer object is placed by its visible part, which slides while the object
   // emerges or hides: its line can be straight and wrong.
   if (track.features.occluded) return false;
-  const LineFit fit = fitVelocity(track.history, p.decision.confirm_sigma_floor);
-  if (!fit.valid) return false;
-  const double speed = fit.velocity.norm();
-  return speed > p.decision.speed &&
-         speed >=
-             speedSignificanceRatio(fit.positions, p.decision.confirm_false_rate) * fit.sigma_v;
+  return significantLine(track.history, p.decision.confirm_sigma_floor, p.decision.speed);
 }
 
 bool MoverDecision::fastMotion(const Track& track, bool seen_standing_only,
@@ -168,12 +173,7 @@ bool MoverDecision::sustainedMotion(const Track& track) const {
   // The window must be mostly covered: a short run of positions is the fast test's business.
   const double span = track.long_history.back().z() - track.long_history.front().z();
   if (span < 0.75 * p.decision.slow_window) return false;
-  const LineFit fit = fitVelocity(track.long_history, p.track.registration_sigma);
-  if (!fit.valid) return false;
-  const double speed = fit.velocity.norm();
-  return speed > p.decision.slow_speed &&
-         speed >=
-             speedSignificanceRatio(fit.positions, p.decision.confirm_false_rate) * fit.sigma_v;
+  return significantLine(track.long_history, p.track.registration_sigma, p.decision.slow_speed);
 }
 
 bool MoverDecision::freeSpaceEvidence(Track& track,

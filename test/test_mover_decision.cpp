@@ -37,6 +37,15 @@ Track movingTrack(double speed, int n) {
   return t;
 }
 
+/// A 3 m/s track with every speed vote of its window, its last view a poor match (B 0.5), so the
+/// vote rule decides, not the early confirmation of well-measured motion.
+Track votedFastTrack() {
+  Track t = movingTrack(3.0, 6);
+  t.fast.assign(5, 1);
+  t.similarity = 0.5;
+  return t;
+}
+
 MoverDecision decisionWithoutFreeSpace() {
   MoverDecision decision;
   decision.setParameters(DetectorParameters());
@@ -94,9 +103,7 @@ TEST(MoverDecision, TestsRunInOrderAndTheFirstFailedIsTheReason) {
     EXPECT_EQ(t.reason, MoverReason::kNoMotion);
   }
   {  // fast: votes of the window and a consistent displacement
-    Track t = movingTrack(3.0, 6);
-    t.fast.assign(5, 1);
-    t.similarity = 0.5;  // not well measured: the vote rule decides
+    Track t = votedFastTrack();
     decision.decide(t, points, none);
     EXPECT_TRUE(t.mover);
     EXPECT_EQ(t.reason, MoverReason::kFast);
@@ -106,9 +113,7 @@ TEST(MoverDecision, TestsRunInOrderAndTheFirstFailedIsTheReason) {
 TEST(MoverDecision, FastVotesWithoutDisplacementAreNoMotion) {
   // Speed votes from a jittering velocity, but the measurements did not get anywhere.
   const auto decision = decisionWithoutFreeSpace();
-  Track t = movingTrack(3.0, 6);
-  t.fast.assign(5, 1);
-  t.similarity = 0.5;
+  Track t = votedFastTrack();
   t.history.back().x() = t.history.front().x() + 0.2;
   decision.decide(t, {}, {});
   EXPECT_FALSE(t.mover);
@@ -151,9 +156,7 @@ TEST(MoverDecision, ASlowWalkerOnAStraightLineIsASustainedMover) {
 TEST(MoverDecision, AConfirmedMoverLatchesAfterAFullWindowOfPositiveDecisions) {
   const auto decision = decisionWithoutFreeSpace();
   const int window = decision.getParameters().decision.window;
-  Track t = movingTrack(3.0, 6);
-  t.fast.assign(5, 1);
-  t.similarity = 0.5;
+  Track t = votedFastTrack();
   for (int k = 0; k < window; ++k) {
     EXPECT_FALSE(t.confirmed) << k;
     decision.decide(t, {}, {});
@@ -171,9 +174,7 @@ TEST(MoverDecision, ALowViewBesideAMoverIsItsFragmentNotAMover) {
   // Seen only above what hides it (a standing height from a nearer object below), but next to
   // a moving track: more likely that object's own upper part than a walker behind a car.
   const auto decision = decisionWithoutFreeSpace();
-  Track part = movingTrack(3.0, 6);
-  part.fast.assign(5, 1);
-  part.similarity = 0.5;
+  Track part = votedFastTrack();
   part.max_height = 0.3;
   part.max_standing_height = 1.7;
   decision.decide(part, {}, {});
@@ -182,9 +183,7 @@ TEST(MoverDecision, ALowViewBesideAMoverIsItsFragmentNotAMover) {
   car.id = 2;
   car.max_length = 4.5;
   car.mover = true;
-  Track beside = movingTrack(3.0, 6);
-  beside.fast.assign(5, 1);
-  beside.similarity = 0.5;
+  Track beside = votedFastTrack();
   beside.max_height = 0.3;
   beside.max_standing_height = 1.7;
   decision.decide(beside, {}, {car});
@@ -197,9 +196,7 @@ TEST(MoverDecision, WithAFreeSpaceMapMotionAloneIsNotEnough) {
   auto decision = decisionWithoutFreeSpace();
   pcl_movers::FreeSpaceMap map;
   decision.setFreeSpaceMap(&map);
-  Track t = movingTrack(3.0, 6);
-  t.fast.assign(5, 1);
-  t.similarity = 0.5;
+  Track t = votedFastTrack();
   const std::vector<Eigen::Vector3f> points = {{1.5f, 0, 0}, {1.6f, 0, 0.5f}};
   decision.decide(t, points, {});
   EXPECT_FALSE(t.mover);

@@ -75,6 +75,12 @@ class MoverDecision {
   bool slowFreeSpaceEvidence(Track& track, const std::vector<Eigen::Vector3f>& points) const;
 
  private:
+  /** \brief The least-squares line through `positions` (σ from their scatter, at least
+   * `min_sigma`) is faster than `min_speed` and rejects "velocity = 0" in the F-test at
+   * decision.confirm_false_rate. */
+  bool significantLine(const std::vector<Eigen::Vector3d>& positions, double min_sigma,
+                       double min_speed) const;
+
   DetectorParameters parameters_;
   const FreeSpaceMap* free_space_map_ = nullptr;
 };

@@ -174,11 +174,8 @@ class MoverTracker {
   /** \brief Scans for the free-space test (see DetectorParameters::free_space_lag); the map must
    * already hold the current frame's scan when update() is called. nullptr (default) disables the
    * test. Not owned. */
-  void setFreeSpaceMap(const FreeSpaceMap* map) {
-    free_space_map_ = map;
-    decision_.setFreeSpaceMap(map);
-  }
-  const FreeSpaceMap* getFreeSpaceMap() const { return free_space_map_; }
+  void setFreeSpaceMap(const FreeSpaceMap* map) { decision_.setFreeSpaceMap(map); }
+  const FreeSpaceMap* getFreeSpaceMap() const { return decision_.getFreeSpaceMap(); }
 
   /** \brief Per input cluster of the last update(), in input order. */
   const std::vector<ClusterResult>& getClusterResults() const { return results_; }
@@ -373,7 +370,6 @@ class MoverTracker {
   TrackGate gate_;  ///< gateTrack()'s work buffer
   /// Buffer of scoreByRegistration(): its gated candidates to register (distance, cluster).
   std::vector<std::pair<double, std::size_t>> to_register_;
-  const FreeSpaceMap* free_space_map_ = nullptr;
   MoverDecision decision_;  ///< the mover decision after each update
   TrackMotion motion_;      ///< the filters of each update
 };

@@ -81,7 +81,6 @@ MoverTracker<PointT>& MoverTracker<PointT>::operator=(const MoverTracker& other)
   registrations_ = other.registrations_;
   has_time_ = other.has_time_;
   last_time_ = other.last_time_;
-  free_space_map_ = other.free_space_map_;
   decision_ = other.decision_;
   motion_ = other.motion_;
   for (auto& t : tracks_)
@@ -876,7 +875,7 @@ void MoverTracker<PointT>::decideAndRemember(Track& t, const Match& m, const Fra
                                              std::vector<Candidate>& candidates) {
   const auto& p = parameters_;
   std::vector<Eigen::Vector3f> world_points;
-  if (free_space_map_ && p.free_space.lag > 0 && !t.large) {
+  if (getFreeSpaceMap() && p.free_space.lag > 0 && !t.large) {
     ensurePoints(frame.cloud, frame.observations[m.cluster].indices, candidates[m.cluster]);
     const auto& pts = *candidates[m.cluster].points;
     world_points.reserve(pts.size());
