@@ -6,6 +6,7 @@
 #include <pcl_movers/common.h>
 #include <pcl_movers/ground_plane_filter.h>
 #include <pcl_movers/mover_detector.h>
+#include <pcl_movers/mover_fragments.h>
 #if __has_include(<pcl_movers/range_image_organizer.h>)
 #include <pcl_movers/range_image_organizer.h>
 #define PCL_MOVERS_HAVE_ORGANIZER 1
@@ -417,65 +418,22 @@ template <typename PointT>
 void MoverDetector<PointT>::labelMoverFragments(const PointCloud& organized,
                                                 const std::vector<pcl::PointIndices>& clusters,
                                                 double pose_yaw, FrameResult& result) const {
-  // Region growing splits an object where its range jumps (a car's wheels behind its body line,
-  // its far side seen through the windows, a walker's legs), and the tracker follows one cluster
-  // per track: the other parts stay static clusters, and their points would be labelled static
-  // though they move with the mover (the corpus: about a tenth of all moving points). A cluster
-  // touching a mover's cluster in the range image and lying within the mover's box, grown by
-  // kFragmentMargin, is taken as part of it: a static object beside a mover extends beyond its
-  // box (a wall, a parked car), and one small enough to fit is labelled moving at the cost of a
-  // few points.
+  // Parts of a mover that region growing split off at a range step would be labelled static
+  // though they move with it (the corpus: about a tenth of all moving points).
   const auto& cluster_results = tracker_.getClusterResults();
-  const int width = static_cast<int>(organized.width), height = static_cast<int>(organized.height);
-  if (height < 2 || width < 2) return;
-  std::vector<int> cluster_of;  // per cell: its cluster, -1 for none
-  std::vector<std::size_t> fragments;
-  for (std::size_t m = 0; m < clusters.size(); ++m) {
-    if (cluster_results[m].track_id < 0 || !cluster_results[m].mover) continue;
-    if (cluster_of.empty()) {
-      cluster_of.assign(organized.size(), -1);
-      for (std::size_t c = 0; c < clusters.size(); ++c)
-        for (const auto i : clusters[c].indices) cluster_of[i] = static_cast<int>(c);
-    }
-    fragments.clear();
-    const int gap = parameters_.segment.max_gap + 1;  // neighbours as region growing sees them
-    for (const auto i : clusters[m].indices) {
-      const int row = i / width, col = i % width;
-      for (int r = std::max(0, row - gap); r <= std::min(height - 1, row + gap); ++r)
-        for (int c = std::max(0, col - gap); c <= std::min(width - 1, col + gap); ++c) {
-          const int f = cluster_of[static_cast<std::size_t>(r) * width + c];
-          if (f < 0 || f == static_cast<int>(m) || cluster_results[f].mover) continue;
-          if (std::find(fragments.begin(), fragments.end(), f) == fragments.end())
-            fragments.push_back(static_cast<std::size_t>(f));
-        }
-    }
-    if (fragments.empty()) continue;
-    // The mover's box in the sensor frame, along its own yaw.
-    const double yaw = cluster_results[m].features.yaw - pose_yaw;
-    const Eigen::Vector2f u(static_cast<float>(std::cos(yaw)), static_cast<float>(std::sin(yaw)));
-    const Eigen::Vector2f v(-u.y(), u.x());
-    Eigen::Vector2f lo = Eigen::Vector2f::Constant(std::numeric_limits<float>::max());
-    Eigen::Vector2f hi = -lo;
-    for (const auto i : clusters[m].indices) {
-      const Eigen::Vector2f q(organized[i].x, organized[i].y);
-      const Eigen::Vector2f a(q.dot(u), q.dot(v));
-      lo = lo.cwiseMin(a);
-      hi = hi.cwiseMax(a);
-    }
-    lo.array() -= kFragmentMargin;
-    hi.array() += kFragmentMargin;
-    for (const std::size_t f : fragments) {
-      const auto& idx = clusters[f].indices;
-      const bool inside = std::all_of(idx.begin(), idx.end(), [&](int i) {
-        const Eigen::Vector2f q(organized[i].x, organized[i].y);
-        const Eigen::Vector2f a(q.dot(u), q.dot(v));
-        return (a.array() >= lo.array()).all() && (a.array() <= hi.array()).all();
-      });
-      if (!inside) continue;
-      for (const auto i : idx) {
-        result.labels[i] = kMover;
-        result.track_ids[i] = cluster_results[m].track_id;
-      }
+  std::vector<bool> mover(clusters.size(), false);
+  std::vector<double> yaw(clusters.size(), 0.0);
+  for (std::size_t c = 0; c < clusters.size(); ++c) {
+    mover[c] = cluster_results[c].track_id >= 0 && cluster_results[c].mover;
+    yaw[c] = cluster_results[c].features.yaw - pose_yaw;  // world heading -> sensor frame
+  }
+  const std::vector<int> owner = findMoverFragments(organized, clusters, mover, yaw,
+                                                    parameters_.segment.max_gap, kFragmentMargin);
+  for (std::size_t f = 0; f < clusters.size(); ++f) {
+    if (owner[f] < 0) continue;
+    for (const auto i : clusters[f].indices) {
+      result.labels[i] = kMover;
+      result.track_ids[i] = cluster_results[static_cast<std::size_t>(owner[f])].track_id;
     }
   }
 }
