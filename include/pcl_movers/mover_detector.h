@@ -80,7 +80,8 @@ class MoverDetector {
     std::vector<pcl::PointIndices> cluster_indices;
     /** The organized sensor-frame scan the indices and labels refer to. */
     PointCloudConstPtr organized;
-    /** Per point of `organized`: Label, and the track id (-1 when none). */
+    /** Per point of `organized`: Label, and the track id (-1 when none): its row's, or, for the
+     * points of a mover's fragment (findMoverFragments()), kMover and the mover's. */
     std::vector<std::uint8_t> labels;
     std::vector<int> track_ids;
     /** Per point of `organized`: the index of the input scan's point it holds, -1 for an empty
