@@ -22,6 +22,8 @@ constexpr float kAzimuthStep = 0.01f, kElevationStep = 0.02f;  // [rad]
 struct Scene {
   pcl::PointCloud<pcl::PointXYZ> cloud{kCols, kRows, pcl::PointXYZ()};
   std::vector<pcl::PointIndices> clusters;
+  float azimuth_step = kAzimuthStep;  ///< [rad] per column; 2π / kCols: a full turn
+  bool wrap_around = false;
 
   Scene() {
     const float nan = std::numeric_limits<float>::quiet_NaN();
@@ -32,7 +34,7 @@ struct Scene {
     pcl::PointIndices cluster;
     for (int r = r0; r <= r1; ++r)
       for (int c = c0; c <= c1; ++c) {
-        const float azimuth = (c - kCols / 2) * kAzimuthStep;
+        const float azimuth = (c - kCols / 2) * azimuth_step;
         const float elevation = (kRows / 2 - r) * kElevationStep;
         auto& p = cloud.at(c, r);
         p.x = range * std::cos(azimuth);
@@ -47,7 +49,7 @@ struct Scene {
     // Boxes along the columns' direction (y, across the line of sight) would do as well; x is
     // the mover's heading here.
     return findMoverFragments(cloud, clusters, mover, std::vector<double>(clusters.size(), 0.0),
-                              /*max_gap=*/2, margin);
+                              /*max_gap=*/2, margin, wrap_around);
   }
 };
 
@@ -102,4 +104,17 @@ TEST(MoverFragments, NoMoverNoFragmentsAndMoversKeepTheirOwnPoints) {
   s.add(10, 11, 22, 37, 10.4f);
   EXPECT_EQ(s.fragments({false, false}), std::vector<int>({-1, -1}));
   EXPECT_EQ(s.fragments({true, true}), std::vector<int>({-1, -1}));
+}
+
+TEST(MoverFragments, TheColumnSeamOfAFullTurnJoinsAsInRegionGrowing) {
+  // A 360° image: columns 0 and 63 are neighbours. A mover at 2 m in the last four columns,
+  // and its part split off 0.1 m behind it in the first two, across the seam.
+  Scene s;
+  s.azimuth_step = 2.0f * static_cast<float>(M_PI) / kCols;
+  s.add(4, 9, 60, 63, 2.0f);
+  const auto part = s.add(4, 9, 0, 1, 2.1f);
+  s.wrap_around = true;
+  EXPECT_EQ(s.fragments({true, false})[part], 0);
+  s.wrap_around = false;  // a sensor with a narrower field of view: the edges are apart
+  EXPECT_EQ(s.fragments({true, false})[part], -1);
 }

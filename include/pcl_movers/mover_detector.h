@@ -230,11 +230,6 @@ class MoverDetector {
   void labelMoverFragments(const PointCloud& organized,
                            const std::vector<pcl::PointIndices>& clusters, double pose_yaw,
                            FrameResult& result) const;
-  /// How far [m] a fragment may reach beyond its mover's box (findMoverFragments()): the box is
-  /// one view's, and the view often misses an edge of the object that a fragment shows. Chosen
-  /// on the corpus's tune split: 0.25 / 0.5 / 1.0 m gave moving IoU 84.3 / 84.7 / 85.0 %, the
-  /// parking family 77.7 / 78.4 / 78.0 %.
-  static constexpr float kFragmentMargin = 0.5f;
   /** \brief The tracks.csv row of one tracked cluster; `world_to_sensor` and `pose_yaw` (the
    * sensor's yaw in the world) are the frame's, computed once for all its rows. */
   io::TrackRow trackRow(const typename MoverTracker<PointT>::ClusterResult& cluster,

@@ -30,12 +30,16 @@ namespace pcl_movers {
  * \param organized the cloud the clusters index (row-major, width × height)
  * \param clusters its clusters
  * \param mover per cluster: whether it is a mover's
- * \param yaw per cluster: the heading of its box (only movers' are read) */
+ * \param yaw per cluster: the heading of its box (only movers' are read)
+ * \param max_gap empty cells region growing bridges (SegmentationParameters::max_gap)
+ * \param margin how far [m] a fragment may reach beyond its mover's box
+ * \param wrap_around whether the first and last columns are neighbours (a 360° sensor), as in
+ * region growing (RangeImageRegionGrowing::setWrapAround) */
 template <typename PointT>
 std::vector<int> findMoverFragments(const pcl::PointCloud<PointT>& organized,
                                     const std::vector<pcl::PointIndices>& clusters,
                                     const std::vector<bool>& mover, const std::vector<double>& yaw,
-                                    int max_gap, float margin) {
+                                    int max_gap, float margin, bool wrap_around = true) {
   std::vector<int> owner(clusters.size(), -1);
   const int width = static_cast<int>(organized.width), height = static_cast<int>(organized.height);
   if (height < 2 || width < 2 || std::none_of(mover.begin(), mover.end(), [](bool m) { return m; }))
@@ -52,7 +56,12 @@ std::vector<int> findMoverFragments(const pcl::PointCloud<PointT>& organized,
     for (const auto i : clusters[m].indices) {
       const int row = i / width, col = i % width;
       for (int r = std::max(0, row - reach); r <= std::min(height - 1, row + reach); ++r)
-        for (int c = std::max(0, col - reach); c <= std::min(width - 1, col + reach); ++c) {
+        for (int dc = -reach; dc <= reach; ++dc) {
+          int c = col + dc;
+          if (c < 0 || c >= width) {
+            if (!wrap_around || reach >= width) continue;
+            c += c < 0 ? width : -width;
+          }
           const int f = cluster_of[static_cast<std::size_t>(r) * width + c];
           if (f >= 0 && !mover[f] &&
               std::find(touching.begin(), touching.end(), f) == touching.end())

@@ -39,6 +39,14 @@ struct SegmentationParameters {
   /// 7 at 8).
   int min_cluster_points = 8;
 
+  /// A cluster touching a mover's in the range image and lying within the mover's box grown by
+  /// this much [m] is a part of the mover that region growing split off at a range step (a car's
+  /// wheels, a walker's legs): its points are labelled moving with it (findMoverFragments). The
+  /// box is one view's, and the view often misses an edge of the object that a fragment shows.
+  /// 0.5, chosen on the scene corpus's tune split: moving-point IoU 84.3 / 84.7 / 85.0 % with
+  /// 0.25 / 0.5 / 1.0 m, the parking family 77.7 / 78.4 / 78.0 %.
+  double fragment_margin = 0.5;
+
   /** \brief Throws InputError naming the first setting out of its range; `prefix` names the
    * settings ("--" for a tool's options, "parameter segment." for the detector's keys). */
   void validate(const std::string& prefix) const {
@@ -50,6 +58,7 @@ struct SegmentationParameters {
     if (max_gap < 0 || max_gap > 64) fail("max_gap", "in 0..64");
     if (!(row_bridge >= 0)) fail("row_bridge", ">= 0");
     if (min_cluster_points < 1) fail("min_cluster_points", ">= 1");
+    if (!(fragment_margin >= 0)) fail("fragment_margin", ">= 0");
   }
 
   /** \brief Calls `f(key, member, description)` for every setting. */
@@ -67,6 +76,8 @@ struct SegmentationParameters {
   template <typename F>
   void forEachConstant(F&& f) {
     f("row_bridge", row_bridge, "gap bridged along a row past empty and nearer cells [m], 0 = off");
+    f("fragment_margin", fragment_margin,
+      "a mover's fragment lies within its box grown by this much [m]");
   }
 };
 

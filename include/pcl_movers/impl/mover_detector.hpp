@@ -427,8 +427,10 @@ void MoverDetector<PointT>::labelMoverFragments(const PointCloud& organized,
     mover[c] = cluster_results[c].track_id >= 0 && cluster_results[c].mover;
     yaw[c] = cluster_results[c].features.yaw - pose_yaw;  // world heading -> sensor frame
   }
-  const std::vector<int> owner = findMoverFragments(organized, clusters, mover, yaw,
-                                                    parameters_.segment.max_gap, kFragmentMargin);
+  const std::vector<int> owner =
+      findMoverFragments(organized, clusters, mover, yaw, parameters_.segment.max_gap,
+                         static_cast<float>(parameters_.segment.fragment_margin),
+                         segmenter_.object && segmenter_.object->getWrapAround());
   for (std::size_t f = 0; f < clusters.size(); ++f) {
     if (owner[f] < 0) continue;
     for (const auto i : clusters[f].indices) {
