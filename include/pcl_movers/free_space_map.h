@@ -97,6 +97,14 @@ class FreeSpaceMap {
    * keeps counting frames; tests against it find nothing (an empty Evidence). */
   void addBlindScan();
 
+  /** \brief Where the sensor was (world frame) for the scan stored `frames_ago` scans back;
+   * NaN when that scan is not stored. */
+  Eigen::Vector3f sensorPosition(int frames_ago = 0) const {
+    if (frames_ago < 0 || frames_ago >= static_cast<int>(scans_.size()))
+      return Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
+    return scans_[static_cast<std::size_t>(frames_ago)].world_to_sensor.inverse().translation();
+  }
+
   /** \brief Scans stored (≤ history). Index 0 is the latest. */
   int size() const { return static_cast<int>(scans_.size()); }
 
