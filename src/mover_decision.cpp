@@ -61,6 +61,10 @@ void MoverDecision::decide(Track& track, const std::vector<Eigen::Vector3f>& poi
   bool free_now = false;  // this update's view passed the free-space test
   const bool slow_now = sustainedMotion(track);
   const bool fast_now = !track.fast.empty() && track.fast.back();
+  // Rays pass through foliage whether it moves or not: a porous view's free space says nothing
+  // (on the tune split most of trail's false alarms were trees whose registration slid).
+  const bool porous =
+      p.free_space.porous_roughness > 0 && track.features.roughness > p.free_space.porous_roughness;
   if (track.hits >= 3 && (fast_now || slow_now)) {
     // Evidence on the time scale of the motion: the short lag for fast motion, the long one for a
     // sustained line (slow, or far away, where the short lag's displacement is within the
@@ -68,9 +72,9 @@ void MoverDecision::decide(Track& track, const std::vector<Eigen::Vector3f>& poi
     // Fast motion that the short lag cannot show at the track's range is tested at the long
     // lag as well, as slow motion is (a walker at 1.3 m/s 30 m away: 0.65 m in 0.5 s against a
     // 0.6 m margin, and it waited for a 1.5 s line before).
-    free_now = (fast_now && freeSpaceEvidence(track, points)) ||
-               ((slow_now || (fast_now && shortLagTooShort(track))) &&
-                slowFreeSpaceEvidence(track, points));
+    free_now = !porous && ((fast_now && freeSpaceEvidence(track, points)) ||
+                           ((slow_now || (fast_now && shortLagTooShort(track))) &&
+                            slowFreeSpaceEvidence(track, points)));
     track.free_votes.push_back(free_now ? 1 : 0);
     while (static_cast<int>(track.free_votes.size()) > p.decision.window)
       track.free_votes.pop_front();

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
 #include <vector>
 
 using pcl_movers::DetectorParameters;
@@ -201,4 +202,31 @@ TEST(MoverDecision, WithAFreeSpaceMapMotionAloneIsNotEnough) {
   decision.decide(t, points, {});
   EXPECT_FALSE(t.mover);
   EXPECT_EQ(t.reason, MoverReason::kNoFreeSpace);
+}
+
+TEST(MoverDecision, APorousViewGivesNoFreeSpaceVote) {
+  // Every stored scan saw a wall 20 m ahead, so the track's points 10 m ahead fill space seen
+  // through: a solid view gets its free-space votes and is a mover. Foliage is seen through
+  // wherever it stands, so a view as rough as a tree's (free_space.porous_roughness) gets none.
+  pcl::PointCloud<pcl::PointXYZ> wall;
+  for (int i = -40; i <= 40; ++i)
+    for (int k = -20; k <= 20; ++k) wall.push_back(pcl::PointXYZ(20.0f, 0.05f * i, 0.05f * k));
+  pcl_movers::FreeSpaceMap map;
+  const DetectorParameters params;
+  map.setHistory(params.free_space.long_lag + 1);
+  for (int f = 0; f <= params.free_space.lag; ++f) map.addScan(wall, Eigen::Isometry3d::Identity());
+  std::vector<Eigen::Vector3f> points;
+  for (int i = -4; i <= 4; ++i)
+    for (int k = -4; k <= 4; ++k) points.emplace_back(10.0f, 0.05f * i, 0.1f * k);
+  MoverDecision decision;
+  decision.setParameters(params);
+  decision.setFreeSpaceMap(&map);
+  for (const double roughness : {0.04, 0.5}) {
+    Track t = votedFastTrack();
+    t.features.roughness = roughness;
+    for (int update = 0; update < params.free_space.votes; ++update) decision.decide(t, points, {});
+    SCOPED_TRACE("roughness " + std::to_string(roughness));
+    EXPECT_EQ(t.mover, roughness < params.free_space.porous_roughness);
+    if (!t.mover) EXPECT_EQ(t.reason, MoverReason::kNoFreeSpace);
+  }
 }

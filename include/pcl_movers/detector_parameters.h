@@ -338,6 +338,8 @@ inline void DetectorParameters::validate() const {
   if (free_space.min_points < 1) throw InputError("parameter free_space.min_points must be >= 1");
   if (free_space.margin < 0 || free_space.margin_per_metre < 0)
     throw InputError("parameters free_space.margin(_per_metre) must be >= 0");
+  if (!(free_space.porous_roughness >= 0))
+    throw InputError("parameter free_space.porous_roughness must be >= 0");
   if (!(free_space.lag_margins >= 0))
     throw InputError("parameter free_space.lag_margins must be >= 0");
   if (decision.confirm_false_rate < 0 || decision.confirm_false_rate >= 1)

@@ -264,6 +264,7 @@ class MoverDetector {
   std::vector<std::uint8_t> occluded_sides_;  ///< describeClusters()' work buffer
   /// Cell labels of the last frame's range image, shared by occludedSides() and occluderFloors()
   typename RangeImageRegionGrowing<PointT>::CellLabels cell_labels_;
+  std::vector<float> roughness_;     ///< per cluster: clusterRoughness()
   std::vector<int> floors_;          ///< per cluster: lowest point of a nearer object below, or -1
   std::vector<float> ground_under_;  ///< groundFloors()' work buffer, kept between frames
   MotionSplitter splitter_;          ///< splitMovingParts()' splitter and its buffers

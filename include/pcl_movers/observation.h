@@ -29,6 +29,9 @@ struct Observation {
   /// What the object stands on (world z): the lowest point of a nearer object hiding its lower
   /// part (a parked car below a walker's head), else the ground under it; NaN = unknown.
   double floor_z = std::numeric_limits<double>::quiet_NaN();
+  /// How rough its surface is in the range image [m] (clusterRoughness()): foliage is porous,
+  /// rays end at random depths in it; NaN = unknown.
+  float roughness = std::numeric_limits<float>::quiet_NaN();
 };
 
 /** \brief Observations of plain clusters: nothing known besides their points. */

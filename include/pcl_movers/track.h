@@ -64,6 +64,8 @@ struct ClusterFeatures {
   /// What the object stands on (world z): the lowest point of a nearer object hiding its lower
   /// part (a parked car below a walker's head), else the ground under it; NaN = unknown.
   double floor_z = std::numeric_limits<double>::quiet_NaN();
+  /// How rough its surface is in the range image [m] (Observation::roughness); NaN = unknown.
+  double roughness = std::numeric_limits<double>::quiet_NaN();
 };
 
 /** \brief One track. Positions and velocities are in the world frame. */

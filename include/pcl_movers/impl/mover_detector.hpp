@@ -12,6 +12,7 @@
 #define PCL_MOVERS_HAVE_ORGANIZER 1
 #endif
 #include <pcl_movers/range_image_region_growing.h>
+#include <pcl_movers/range_roughness.h>
 
 #include <algorithm>
 #include <chrono>
@@ -345,9 +346,15 @@ std::vector<Observation> MoverDetector<PointT>::describeClusters(
   std::vector<Observation> observations(clusters.size());
   for (std::size_t c = 0; c < clusters.size(); ++c)
     observations[c].indices = std::move(world_clusters[c]);
-  // One labelling of the range image's cells serves both occlusion tests below.
-  if (p.track.occluded_fraction > 0 || p.decision.standing_height)
+  // One labelling of the range image's cells serves the roughness and both occlusion tests below.
+  if (p.track.occluded_fraction > 0 || p.decision.standing_height ||
+      p.free_space.porous_roughness > 0)
     RangeImageRegionGrowing<PointT>::cellLabels(organized, objects, clusters, cell_labels_);
+  // Porous objects (foliage) are seen through wherever they stand (MoverDecision::decide()).
+  if (p.free_space.porous_roughness > 0) {
+    clusterRoughness(organized, cell_labels_.label, clusters, roughness_);
+    for (std::size_t c = 0; c < clusters.size(); ++c) observations[c].roughness = roughness_[c];
+  }
   // Occluded cluster sides (range image, sensor frame): measurements there can slide.
   if (p.track.occluded_fraction > 0) {
     RangeImageRegionGrowing<PointT>::occludedSides(

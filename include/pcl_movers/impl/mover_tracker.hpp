@@ -503,6 +503,7 @@ std::vector<typename MoverTracker<PointT>::Candidate> MoverTracker<PointT>::make
                           cand.features.height > p.decision.max_height;
     cand.features.occluded = observation.occluded || observation.split_part;
     cand.features.floor_z = observation.floor_z;
+    cand.features.roughness = observation.roughness;
     results_[c].features = cand.features;
   }
   return candidates;
