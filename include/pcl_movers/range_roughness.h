@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <vector>
 
 namespace pcl_movers {
@@ -38,6 +39,8 @@ void clusterRoughness(const pcl::PointCloud<PointT>& organized,
   roughness.assign(clusters.size(), std::numeric_limits<float>::quiet_NaN());
   if (cell_cluster.size() != n || organized.height < 2) return;
   std::vector<float> along_row, along_column;
+  // Each cell's range, computed once; only cells of the cluster at hand are read.
+  std::unique_ptr<float[]> range(new float[n]);
   const auto median = [](std::vector<float>& v) {
     const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
     std::nth_element(v.begin(), mid, v.end());
@@ -48,10 +51,13 @@ void clusterRoughness(const pcl::PointCloud<PointT>& organized,
     along_column.clear();
     for (const auto index : clusters[c].indices) {
       const auto i = static_cast<std::size_t>(index);
-      const float r = organized[i].getVector3fMap().norm();
+      range[i] = organized[i].getVector3fMap().norm();
+    }
+    for (const auto index : clusters[c].indices) {
+      const auto i = static_cast<std::size_t>(index);
       const auto step = [&](std::size_t j, std::vector<float>& out) {
         if (j < n && cell_cluster[j] == static_cast<int>(c))
-          out.push_back(std::abs(organized[j].getVector3fMap().norm() - r));
+          out.push_back(std::abs(range[j] - range[i]));
       };
       if ((i + 1) % width != 0) step(i + 1, along_row);
       step(i + width, along_column);
