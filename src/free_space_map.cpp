@@ -369,7 +369,7 @@ FreeSpaceMap::Sight FreeSpaceMap::sightAt(const Scan& s, float z, float d, int r
   // A lost return may have been something closer than the sensor's minimum range, right in
   // front of the point: what the other rays saw says nothing then.
   if (lost) return Sight::kUnknown;
-  const float margin = static_cast<float>(std::max(margin_, margin_per_metre_ * d));
+  const auto margin = static_cast<float>(this->margin(d));
   if (nearest == 0.0f) {
     // Nothing returned around there: unknown, unless the direction points down and a beam was
     // cast there (see setNoReturnRange()). Not within the sensor's minimum range of that scan

@@ -249,7 +249,7 @@ bool MoverDecision::shortLagTooShort(const Track& track) const {
   const double frame_period = (track.history.back().z() - track.history.front().z()) /
                               static_cast<double>(track.history.size() - 1);
   const double range = (track.filter.position() - sensor.head<2>().cast<double>()).norm();
-  const double margin = std::max(p.free_space.margin, p.free_space.margin_per_metre * range);
+  const double margin = free_space_map_->margin(range);
   if (!(track.filter.speed() * p.free_space.lag * frame_period < p.free_space.lag_margins * margin))
     return false;
   // The registered positions so far lie on a line, as sustainedMotion() asks of slow motion but

@@ -1,17 +1,14 @@
 /*
  * SPDX-License-Identifier: BSD-3-Clause
  */
-// clusterRoughness() on hand-made range images: 16 rows × 64 columns looking along +x, every
-// cell of a cluster at a range the test chooses.
+// clusterRoughness() on hand-made range images: 16 rows × 64 columns, every cell of a cluster
+// at a range the test chooses, the other cells taking no part (negative range).
 #include <pcl_movers/range_roughness.h>
-
-#include <pcl/point_types.h>
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <functional>
-#include <limits>
 #include <random>
 
 using pcl_movers::clusterRoughness;
@@ -19,37 +16,27 @@ using pcl_movers::clusterRoughness;
 namespace {
 
 constexpr int kRows = 16, kCols = 64;
-constexpr float kAzimuthStep = 0.003f, kElevationStep = 0.007f;  // [rad]: an HDL-64-like image
 
 struct Image {
-  pcl::PointCloud<pcl::PointXYZ> cloud{kCols, kRows, pcl::PointXYZ()};
+  std::vector<float> range = std::vector<float>(kRows * kCols, -1.0f);
   std::vector<int> cell_cluster = std::vector<int>(kRows * kCols, -2);
   std::vector<pcl::PointIndices> clusters;
 
-  Image() {
-    const float nan = std::numeric_limits<float>::quiet_NaN();
-    for (auto& p : cloud) p.x = p.y = p.z = nan;
-  }
-  /// A cluster filling rows [r0, r1] × columns [c0, c1], cell (r, c) at range(r, c).
-  void add(int r0, int r1, int c0, int c1, const std::function<float(int, int)>& range) {
+  /// A cluster filling rows [r0, r1] × columns [c0, c1], cell (r, c) at range_of(r, c).
+  void add(int r0, int r1, int c0, int c1, const std::function<float(int, int)>& range_of) {
     pcl::PointIndices cluster;
     for (int r = r0; r <= r1; ++r)
       for (int c = c0; c <= c1; ++c) {
-        const float azimuth = (c - kCols / 2) * kAzimuthStep;
-        const float elevation = (kRows / 2 - r) * kElevationStep;
-        const float d = range(r, c);
-        auto& p = cloud.at(c, r);
-        p.x = d * std::cos(elevation) * std::cos(azimuth);
-        p.y = d * std::cos(elevation) * std::sin(azimuth);
-        p.z = d * std::sin(elevation);
+        const auto cell = static_cast<std::size_t>(r * kCols + c);
+        range[cell] = range_of(r, c);
         cluster.indices.push_back(r * kCols + c);
-        cell_cluster[static_cast<std::size_t>(r * kCols + c)] = static_cast<int>(clusters.size());
+        cell_cluster[cell] = static_cast<int>(clusters.size());
       }
     clusters.push_back(cluster);
   }
   std::vector<float> roughness() const {
     std::vector<float> out;
-    clusterRoughness(cloud, cell_cluster, clusters, out);
+    clusterRoughness(range, kCols, cell_cluster, clusters, out);
     return out;
   }
 };

@@ -53,6 +53,8 @@ class FreeSpaceMap {
   }
   double getMargin() const { return margin_; }
   double getMarginPerMetre() const { return margin_per_metre_; }
+  /** \brief The range margin [m] at `distance` [m]: max(margin, margin_per_metre · distance). */
+  double margin(double distance) const { return std::max(margin_, margin_per_metre_ * distance); }
   /** \brief A direction below the stored scan's sensor (z < 0 in its frame) whose whole window
    * returned nothing, although one of the window's rows is a beam (some stored scan has a return
    * in it), counts as seen empty up to this range [m]; 0, the default:

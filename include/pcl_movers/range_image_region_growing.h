@@ -103,6 +103,10 @@ class RangeImageRegionGrowing : public pcl::PCLBase<PointT> {
   void setWrapAround(bool wrap) { wrap_around_ = wrap; }
   bool getWrapAround() const { return wrap_around_; }
 
+  /** \brief Per cell of the last segment()'s range image (row-major): its range from the sensor
+   * origin, negative for cells that took no part (no point, or not in the indices). */
+  const std::vector<float>& getCellRanges() const { return range_; }
+
   /** \brief Empty cells bridged in each direction (0 = the paper's strict 8-neighbour rule). */
   void setMaxGap(int gap) { max_gap_ = gap; }
   int getMaxGap() const { return max_gap_; }

@@ -4,12 +4,10 @@
 #pragma once
 
 #include <pcl/PointIndices.h>
-#include <pcl/point_cloud.h>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <memory>
 #include <vector>
 
 namespace pcl_movers {
@@ -25,22 +23,20 @@ namespace pcl_movers {
  * one direction where it is seen at a grazing angle (a car's side nearly along the line of
  * sight: its row neighbours, not its column neighbours), hence the smaller of the two.
  *
- * \param organized the range image the clusters index (row-major, width × height)
+ * \param cell_range per cell of the range image (row-major): its range [m]
+ * (RangeImageRegionGrowing::getCellRanges(); only the clusters' cells are read)
+ * \param width the range image's width
  * \param cell_cluster per cell: the index of the cluster holding it, or a negative value
  * \param clusters the clusters
  * \param[out] roughness per cluster [m] */
-template <typename PointT>
-void clusterRoughness(const pcl::PointCloud<PointT>& organized,
-                      const std::vector<int>& cell_cluster,
-                      const std::vector<pcl::PointIndices>& clusters,
-                      std::vector<float>& roughness) {
-  const auto width = static_cast<std::size_t>(organized.width);
-  const std::size_t n = organized.size();
+inline void clusterRoughness(const std::vector<float>& cell_range, std::size_t width,
+                             const std::vector<int>& cell_cluster,
+                             const std::vector<pcl::PointIndices>& clusters,
+                             std::vector<float>& roughness) {
+  const std::size_t n = cell_range.size();
   roughness.assign(clusters.size(), std::numeric_limits<float>::quiet_NaN());
-  if (cell_cluster.size() != n || organized.height < 2) return;
+  if (cell_cluster.size() != n || width == 0) return;
   std::vector<float> along_row, along_column;
-  // Each cell's range, computed once; only cells of the cluster at hand are read.
-  std::unique_ptr<float[]> range(new float[n]);
   const auto median = [](std::vector<float>& v) {
     const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
     std::nth_element(v.begin(), mid, v.end());
@@ -51,13 +47,9 @@ void clusterRoughness(const pcl::PointCloud<PointT>& organized,
     along_column.clear();
     for (const auto index : clusters[c].indices) {
       const auto i = static_cast<std::size_t>(index);
-      range[i] = organized[i].getVector3fMap().norm();
-    }
-    for (const auto index : clusters[c].indices) {
-      const auto i = static_cast<std::size_t>(index);
       const auto step = [&](std::size_t j, std::vector<float>& out) {
         if (j < n && cell_cluster[j] == static_cast<int>(c))
-          out.push_back(std::abs(range[j] - range[i]));
+          out.push_back(std::abs(cell_range[j] - cell_range[i]));
       };
       if ((i + 1) % width != 0) step(i + 1, along_row);
       step(i + width, along_column);

@@ -351,8 +351,9 @@ std::vector<Observation> MoverDetector<PointT>::describeClusters(
       p.free_space.porous_roughness > 0)
     RangeImageRegionGrowing<PointT>::cellLabels(organized, objects, clusters, cell_labels_);
   // Porous objects (foliage) are seen through wherever they stand (MoverDecision::decide()).
-  if (p.free_space.porous_roughness > 0) {
-    clusterRoughness(organized, cell_labels_.label, clusters, roughness_);
+  if (p.free_space.porous_roughness > 0 && segmenter_.object) {
+    clusterRoughness(segmenter_.object->getCellRanges(), organized.width, cell_labels_.label,
+                     clusters, roughness_);
     for (std::size_t c = 0; c < clusters.size(); ++c) observations[c].roughness = roughness_[c];
   }
   // Occluded cluster sides (range image, sensor frame): measurements there can slide.
