@@ -244,7 +244,7 @@ CorpusRun detectAndScore(const Options& opt, const std::string& detect, const Sc
   run.mode = mode;
   run.frames = scenario.frames;
   run.blind_frames = int(scenario.blind_frames.size());
-  std::vector<std::string> args = {detect, seq.string(),  out.string(),    "--mode",
+  std::vector<std::string> args = {detect, seq.string(),  out.string(),    "--track.mode",
                                    mode,   "--overwrite", "--point-labels"};
   for (const auto& w : words(opt.detect_args)) args.push_back(w);
   fs::create_directories(out.parent_path());

@@ -39,7 +39,7 @@ run() {
   shift 4
   local out="$work/$set.$mode.out" start end
   start=$(date +%s.%N)
-  "$DETECT" "$seq" "$out" --mode "$mode" "$@" >"$work/$set.$mode.log" 2>&1 ||
+  "$DETECT" "$seq" "$out" --track.mode "$mode" "$@" >"$work/$set.$mode.log" 2>&1 ||
     { echo "error: pcl_movers_detect failed on $set ($mode):" >&2; tail -20 "$work/$set.$mode.log" >&2; exit 1; }
   end=$(date +%s.%N)
   echo "$start $end" >"$work/$set.$mode.s"
@@ -61,7 +61,7 @@ run() {
 CITY=0
 if [ -d "$DATA/kitti-city-22/frames" ]; then
   for mode in registration centroid; do
-    "$DETECT" "$DATA/kitti-city-22" "$work/city.$mode.out" --mode "$mode" >"$work/city.$mode.log" 2>&1 ||
+    "$DETECT" "$DATA/kitti-city-22" "$work/city.$mode.out" --track.mode "$mode" >"$work/city.$mode.log" 2>&1 ||
       { echo "error: pcl_movers_detect failed on kitti-city-22 ($mode):" >&2; tail -20 "$work/city.$mode.log" >&2; exit 1; }
   done
   CITY=1

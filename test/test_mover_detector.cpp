@@ -573,6 +573,39 @@ statics:
   }
 }
 
+// A forward-looking ladar's image covers a quarter turn: its first and last columns are 90° apart,
+// and the two cars standing at its left and right edges are two objects, not one joined across
+// the image's ends as a spinning sensor's seam would be.
+TEST(MoverDetector, AForwardLookingImageDoesNotJoinItsTwoEdges) {
+  const std::string yaml = R"(name: edges
+seed: 5
+frames: 2
+rate_hz: 10
+sensor: {preset: ladar2d, height: 1.8, max_range: 80, range_noise: 0.0, dropout: 0.0}
+terrain: {type: plane, height: 0, surface: terrain}
+ego: {start: [0, 0], heading: 0, speed: 0}
+statics:
+  - {type: car, position: [11.5, 11], yaw: 0}
+  - {type: car, position: [11.5, -11], yaw: 0}
+)";
+  pcl_movers::sim::LidarSimulator simulator(pcl_movers::sim::parseScenario(yaml, "edges"));
+  const SampleFrames f = simulateFrames(simulator, 2);
+  ASSERT_GT(f.scans[0]->height, 1u);  // organized: the detector takes its columns as they are
+  Detector detector;
+  detector.setParameters(pcl_movers::DetectorParameters());
+  Detector::FrameResult result;
+  for (std::size_t i = 0; i < f.scans.size(); ++i)
+    detector.process(f.scans[i], f.poses[i], f.times[i], static_cast<int>(i), result);
+  int left = 0, right = 0;
+  for (const auto& r : result.rows) {
+    left += r.y > 8;
+    right += r.y < -8;
+    EXPECT_GT(std::abs(r.y), 8) << "a row between the cars: the two edges joined";
+  }
+  EXPECT_EQ(left, 1);
+  EXPECT_EQ(right, 1);
+}
+
 // Real KITTI frames: the moving van and cyclist become movers within a few frames, the parked van
 // (track 3) never does.
 TEST(MoverDetector, KittiVanAndCyclist) {

@@ -196,6 +196,49 @@ TEST(RangeImageOrganizer, OrganizedInputPassesThrough) {
   }
 }
 
+TEST(RangeImageOrganizer, OrganizedInputClosesAFullTurnOnlyWhenItsColumnsCoverOne) {
+  // Organized input brings its own columns: whether the first and last are neighbours is measured
+  // from the azimuth step between them (a forward-looking ladar covers a quarter turn, a spinning
+  // sensor the whole of it, whichever way its columns run).
+  const auto image = [](int columns, double field_deg, double sign) {
+    Cloud::Ptr cloud(new Cloud(columns, 4));
+    for (int c = 0; c < columns; ++c)
+      for (int r = 0; r < 4; ++r) {
+        const double azimuth =
+            sign * (-0.5 * field_deg + (c + 0.5) * field_deg / columns) * M_PI / 180.0;
+        auto& p = cloud->at(c, r);
+        p.x = static_cast<float>(10.0 * std::cos(azimuth));
+        p.y = static_cast<float>(10.0 * std::sin(azimuth));
+        p.z = static_cast<float>(r) - 2.f;
+      }
+    for (int c = 0; c < columns; c += 7) cloud->at(c, 0).x = std::nanf("");  // dropouts
+    return cloud;
+  };
+  RangeImageOrganizer<pcl::PointXYZI> organizer;
+  Cloud out;
+  for (const double sign : {1.0, -1.0}) {
+    organizer.setInputCloud(image(360, 90.0, sign));
+    organizer.organize(out);
+    EXPECT_FALSE(organizer.isFullTurn()) << "90°, sign " << sign;
+    organizer.setInputCloud(image(1024, 360.0, sign));
+    organizer.organize(out);
+    EXPECT_TRUE(organizer.isFullTurn()) << "360°, sign " << sign;
+  }
+  // Unorganized input takes the field of view of its sensor model.
+  organizer.setSensorModel(SensorModel::hdl64());
+  Cloud::Ptr ring(new Cloud);
+  for (int c = 0; c < 100; ++c) {
+    pcl::PointXYZI p;
+    p.x = 10.f * std::cos(0.06f * c);
+    p.y = 10.f * std::sin(0.06f * c);
+    p.z = -1.f;
+    ring->push_back(p);
+  }
+  organizer.setInputCloud(ring);
+  organizer.organize(out);
+  EXPECT_TRUE(organizer.isFullTurn());
+}
+
 TEST(RangeImageOrganizer, BadInputsThrowInputError) {
   RangeImageOrganizer<pcl::PointXYZI> organizer;
   organizer.setSensorModel(SensorModel::vlp16());

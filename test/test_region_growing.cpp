@@ -545,3 +545,29 @@ TEST(RangeImageRegionGrowing, SharedCellLabelsGiveTheSameOcclusionAnswers) {
   EXPECT_EQ(shared_sides, std::vector<std::uint8_t>(clusters.size(), 0));
   EXPECT_EQ(shared_floors, std::vector<int>(clusters.size(), -1));
 }
+
+// An image narrower than a full turn ends at the edges of the field of view: a car straddling an
+// edge is seen in part, as if an occluder hid the rest, and its registered position would slide
+// while it enters the view. The same image taken as a full turn joins the car across the seam and
+// finds nothing hidden.
+TEST(RangeImageRegionGrowing, TheEdgeOfAFieldOfViewHidesLikeANearerObject) {
+  using RG = RangeImageRegionGrowing<pcl::PointXYZ>;
+  const Cloud::Ptr cloud =
+      rayCast({Box{{-12.f, -1.f, -1.f}, {-10.f, 1.f, 1.f}}});  // behind: the seam
+  const pcl::Indices objects = finiteIndices(*cloud);
+  const auto halves = segment(cloud, 0.05f, false);
+  ASSERT_EQ(halves.size(), 2u);
+  std::vector<std::uint8_t> sides;
+  RG::occludedSides(*cloud, objects, halves, 0.05f, 0.1f, 2, false, 0.3f, sides);
+  ASSERT_EQ(sides.size(), 2u);
+  for (std::size_t c = 0; c < halves.size(); ++c) {
+    const int column = halves[c].indices.front() % static_cast<int>(cloud->width);
+    // The half at the first columns is cut on its left (towards column 0), the other on its right.
+    EXPECT_EQ(sides[c], column < 10 ? RG::kOccludedLeft : RG::kOccludedRight)
+        << "column " << column;
+  }
+  const auto whole = segment(cloud, 0.05f, true);
+  ASSERT_EQ(whole.size(), 1u);
+  RG::occludedSides(*cloud, objects, whole, 0.05f, 0.1f, 2, true, 0.3f, sides);
+  EXPECT_EQ(sides, std::vector<std::uint8_t>{0});
+}

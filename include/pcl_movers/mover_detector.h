@@ -270,6 +270,8 @@ class MoverDetector {
   MotionSplitter splitter_;          ///< splitMovingParts()' splitter and its buffers
   std::vector<Eigen::Vector3f> split_points_;  ///< splitMovingParts(): world points to judge
   StageObject<RangeImageOrganizer<PointT>> organizer_;
+  /// Whether the last range image's first and last columns are neighbours (organize()).
+  bool full_turn_ = true;
   StageObject<GroundPlaneFilter<PointT>> ground_;
   StageObject<RangeImageRegionGrowing<PointT>> segmenter_;
   StageObject<PointCloud> organized_buffer_;  ///< the last range image, reused when released

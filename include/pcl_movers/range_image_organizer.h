@@ -105,6 +105,13 @@ class RangeImageOrganizer : public pcl::PCLBase<PointT> {
   std::size_t getOutOfViewCount() const { return out_of_view_; }
   /** \brief True when the last input was already organized and was passed through. */
   bool wasPassThrough() const { return pass_through_; }
+  /** \brief Whether the last output's first and last columns are neighbours (its columns close a
+   * full turn): the sensor model's field of view, or for organized input passed through, the
+   * median azimuth step between its columns times its width (a forward-looking sensor's image
+   * covers a part of the turn only). */
+  bool isFullTurn() const { return full_turn_; }
+  /** \brief Whether the columns of an organized image close a full turn (see isFullTurn()). */
+  static bool columnsCloseFullTurn(const PointCloud& image);
 
  protected:
   using pcl::PCLBase<PointT>::input_;
@@ -136,6 +143,7 @@ class RangeImageOrganizer : public pcl::PCLBase<PointT> {
   PointCloud image_;  ///< scratch output for organize(*input), swapped into place
   std::size_t displaced_ = 0, shifted_ = 0, invalid_ = 0, out_of_view_ = 0, placed_ = 0;
   bool pass_through_ = false;
+  bool full_turn_ = true;
 
   // Lookups of the current model, rebuilt only when the model or the column count change (a
   // caller organizes one frame after the other with the same sensor).

@@ -90,7 +90,12 @@ void MoverDetector<PointT>::coast(const Eigen::Isometry3d& pose, double time, Fr
 template <typename PointT>
 typename MoverDetector<PointT>::PointCloudConstPtr MoverDetector<PointT>::organize(
     const PointCloudConstPtr& scan) {
-  if (scan->isOrganized() && scan->height > 1) return scan;
+  if (scan->isOrganized() && scan->height > 1) {
+#ifdef PCL_MOVERS_HAVE_ORGANIZER
+    full_turn_ = RangeImageOrganizer<PointT>::columnsCloseFullTurn(*scan);
+#endif
+    return scan;
+  }
   if (!has_sensor_model_ && sensor_model_.rows() == 0)
     throw InputError("MoverDetector: no sensor model (process() estimates it first)");
   // The previous frame's range image is written over when neither the caller nor a stage holds
@@ -110,6 +115,7 @@ typename MoverDetector<PointT>::PointCloudConstPtr MoverDetector<PointT>::organi
   }
   organizer_.object->setInputCloud(scan);
   organizer_.object->organize(*organized);
+  full_turn_ = organizer_.object->isFullTurn();
   input_indices_ = organizer_.object->getIndexImage();
 #else
   // Plain projection onto the sensor model's grid, nearest return per cell.
@@ -120,6 +126,7 @@ typename MoverDetector<PointT>::PointCloudConstPtr MoverDetector<PointT>::organi
   organized->width = cols;
   organized->height = rows;
   organized->is_dense = false;
+  full_turn_ = sensor_model_.isFullRevolution();
   std::vector<float> best(organized->size(), std::numeric_limits<float>::max());
   input_indices_.assign(organized->size(), -1);
   for (std::size_t j = 0; j < scan->size(); ++j) {
@@ -162,6 +169,10 @@ std::vector<pcl::PointIndices> MoverDetector<PointT>::segmentObjects(
   segmenter.setInputCloud(organized);
   segmenter.setIndices(objects);
   segmenter.setParameters(p.segment);
+  // The first and last columns are neighbours only when they close a full turn: a forward-looking
+  // ladar's 90° image has its two edges a quarter turn apart, and objects at either edge were
+  // joined into one cluster.
+  segmenter.setWrapAround(full_turn_);
   std::vector<pcl::PointIndices> clusters;
   segmenter.segment(clusters);
   return clusters;
@@ -360,7 +371,8 @@ std::vector<Observation> MoverDetector<PointT>::describeClusters(
   if (p.track.occluded_fraction > 0) {
     RangeImageRegionGrowing<PointT>::occludedSides(
         organized, cell_labels_, clusters, static_cast<float>(p.segment.depth_ratio),
-        static_cast<float>(p.segment.depth_min), p.segment.max_gap, true,
+        static_cast<float>(p.segment.depth_min), p.segment.max_gap,
+        segmenter_.object && segmenter_.object->getWrapAround(),
         static_cast<float>(p.track.occluded_fraction), occluded_sides_);
     for (std::size_t c = 0; c < clusters.size(); ++c)
       observations[c].occluded = occluded_sides_[c] != 0;

@@ -555,6 +555,35 @@ void RangeImageOrganizer<PointT>::passThrough(PointCloud& output) {
     }
   }
   output.is_dense = false;
+  full_turn_ = columnsCloseFullTurn(output);
+}
+
+template <typename PointT>
+bool RangeImageOrganizer<PointT>::columnsCloseFullTurn(const PointCloud& image) {
+  // The azimuth of each column's first return; the median step between columns with returns.
+  const int width = static_cast<int>(image.width), height = static_cast<int>(image.height);
+  std::vector<float> steps;
+  int last_column = -1;
+  float last_azimuth = 0.f;
+  for (int c = 0; c < width; ++c) {
+    for (int r = 0; r < height; ++r) {
+      const auto& p = image[static_cast<std::size_t>(r) * width + c];
+      if (!std::isfinite(p.x) || !std::isfinite(p.y) || (p.x == 0.f && p.y == 0.f)) continue;
+      const float azimuth = std::atan2(p.y, p.x);
+      if (last_column >= 0) {
+        float d = azimuth - last_azimuth;
+        d -= static_cast<float>(2 * M_PI) * std::round(d / static_cast<float>(2 * M_PI));
+        steps.push_back(std::abs(d) / static_cast<float>(c - last_column));
+      }
+      last_column = c;
+      last_azimuth = azimuth;
+      break;
+    }
+  }
+  if (steps.size() < 2) return true;  // nothing to tell: the detector's former assumption
+  auto middle = steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2);
+  std::nth_element(steps.begin(), middle, steps.end());
+  return *middle * static_cast<float>(width) > 0.95f * static_cast<float>(2 * M_PI);
 }
 
 template <typename PointT>
@@ -587,6 +616,7 @@ void RangeImageOrganizer<PointT>::organize(PointCloud& output) {
     }
     lookup_ready_ = false;
   }
+  full_turn_ = model_.isFullRevolution();
   const int rows = model_.rows();
   const int columns = columns_ > 0 ? columns_ : model_.columns();
   // The lookups depend on the model and the width only: kept from frame to frame.
