@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <vector>
 
 namespace pcl_movers {
 
@@ -39,6 +41,14 @@ void MoverDecision::voteFast(Track& t, bool registered) const {
   while (static_cast<int>(t.fast.size()) > p.decision.window) t.fast.pop_front();
 }
 
+double MoverDecision::medianRoughness(const Track& track) {
+  if (track.roughness.empty()) return std::numeric_limits<double>::quiet_NaN();
+  std::vector<float> r(track.roughness.begin(), track.roughness.end());
+  const auto middle = r.begin() + static_cast<std::ptrdiff_t>(r.size() / 2);
+  std::nth_element(r.begin(), middle, r.end());
+  return *middle;
+}
+
 void MoverDecision::decide(Track& track, const std::vector<Eigen::Vector3f>& points,
                            const std::vector<Track>& tracks) const {
   const auto& p = parameters_;
@@ -61,10 +71,17 @@ void MoverDecision::decide(Track& track, const std::vector<Eigen::Vector3f>& poi
   bool free_now = false;  // this update's view passed the free-space test
   const bool slow_now = sustainedMotion(track);
   const bool fast_now = !track.fast.empty() && track.fast.back();
-  // Rays pass through foliage whether it moves or not: a porous view's free space says nothing
-  // (on the tune split most of trail's false alarms were trees whose registration slid).
+  // Rays pass through foliage whether it moves or not: a porous object's free space says nothing
+  // (on the tune split most of trail's false alarms were trees whose registration slid). Judged
+  // on the median of its last decision.window views: a bush's roughness flickers around the bound
+  // from view to view (paper wooded scene: the false alarms came back on its smoother views),
+  // and a solid object may show one rough view (a forward ladar's car at 70 m, 0.3 m between
+  // cells: 0.11-0.35 m from view to view; the roughest of the window cost it 16 hits).
+  if (std::isfinite(track.features.roughness))
+    track.roughness.push_back(static_cast<float>(track.features.roughness));
+  while (static_cast<int>(track.roughness.size()) > p.decision.window) track.roughness.pop_front();
   const bool porous =
-      p.free_space.porous_roughness > 0 && track.features.roughness > p.free_space.porous_roughness;
+      p.free_space.porous_roughness > 0 && medianRoughness(track) > p.free_space.porous_roughness;
   if (track.hits >= 3 && (fast_now || slow_now)) {
     // Evidence on the time scale of the motion: the short lag for fast motion, the long one for a
     // sustained line (slow, or far away, where the short lag's displacement is within the

@@ -230,3 +230,37 @@ TEST(MoverDecision, APorousViewGivesNoFreeSpaceVote) {
     if (!t.mover) EXPECT_EQ(t.reason, MoverReason::kNoFreeSpace);
   }
 }
+
+TEST(MoverDecision, PorousIsJudgedOnTheMedianOfTheRecentViews) {
+  // The same seen-through wall as above. A bush's views flicker around the roughness bound: its
+  // smoother views must not collect the votes its rougher ones are denied. A solid object with
+  // one rough view among smooth ones keeps its votes.
+  pcl::PointCloud<pcl::PointXYZ> wall;
+  for (int i = -40; i <= 40; ++i)
+    for (int k = -20; k <= 20; ++k) wall.push_back(pcl::PointXYZ(20.0f, 0.05f * i, 0.05f * k));
+  pcl_movers::FreeSpaceMap map;
+  const DetectorParameters params;
+  map.setHistory(params.free_space.long_lag + 1);
+  for (int f = 0; f <= params.free_space.lag; ++f) map.addScan(wall, Eigen::Isometry3d::Identity());
+  std::vector<Eigen::Vector3f> points;
+  for (int i = -4; i <= 4; ++i)
+    for (int k = -4; k <= 4; ++k) points.emplace_back(10.0f, 0.05f * i, 0.1f * k);
+  MoverDecision decision;
+  decision.setParameters(params);
+  decision.setFreeSpaceMap(&map);
+  const double bound = params.free_space.porous_roughness;
+  const auto decideViews = [&](const std::vector<double>& roughness) {
+    Track t = votedFastTrack();
+    for (const double r : roughness) {
+      t.features.roughness = r;
+      decision.decide(t, points, {});
+    }
+    return t;
+  };
+  const Track bush =
+      decideViews({1.3 * bound, 0.8 * bound, 1.3 * bound, 0.8 * bound, 1.3 * bound, 0.8 * bound});
+  EXPECT_FALSE(bush.mover);
+  EXPECT_EQ(bush.reason, MoverReason::kNoFreeSpace);
+  const Track car = decideViews({0.2 * bound, 1.5 * bound, 0.2 * bound, 0.2 * bound});
+  EXPECT_TRUE(car.mover);
+}

@@ -51,6 +51,9 @@ class MoverDecision {
    * points, and the line through the window's positions faster than decision.speed and
    * significantly non-zero. */
   bool wellMeasuredMotion(const Track& track) const;
+  /** \brief The median roughness (ClusterFeatures::roughness) of the track's last
+   * decision.window views; porous above free_space.porous_roughness. */
+  static double medianRoughness(const Track& track);
   /** \brief The track's positions over the last slow_window seconds lie on a line faster than
    * slow_speed, beyond their scatter (F-test at confirm_false_rate). */
   bool sustainedMotion(const Track& track) const;
