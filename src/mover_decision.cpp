@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <vector>
 
 namespace pcl_movers {
 
@@ -42,11 +41,19 @@ void MoverDecision::voteFast(Track& t, bool registered) const {
 }
 
 double MoverDecision::medianRoughness(const Track& track) {
-  if (track.roughness.empty()) return std::numeric_limits<double>::quiet_NaN();
-  std::vector<float> r(track.roughness.begin(), track.roughness.end());
-  const auto middle = r.begin() + static_cast<std::ptrdiff_t>(r.size() / 2);
-  std::nth_element(r.begin(), middle, r.end());
-  return *middle;
+  // The value of rank size / 2 by counting, without a copy to sort: the window holds a few
+  // values, and this runs for every decided track every frame.
+  const auto& r = track.roughness;
+  const std::size_t rank = r.size() / 2;
+  for (const float v : r) {
+    std::size_t below = 0, equal = 0;
+    for (const float w : r) {
+      below += w < v;
+      equal += w == v;
+    }
+    if (below <= rank && rank < below + equal) return v;
+  }
+  return std::numeric_limits<double>::quiet_NaN();  // no view with a known roughness
 }
 
 void MoverDecision::decide(Track& track, const std::vector<Eigen::Vector3f>& points,

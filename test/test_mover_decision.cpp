@@ -53,6 +53,30 @@ MoverDecision decisionWithoutFreeSpace() {
   return decision;  // no free-space map: the free-space tests are off
 }
 
+/// Every stored scan saw a wall 20 m ahead, so `points`, a 0.45 m × 0.8 m patch 10 m ahead, fill
+/// space seen through: a decision with this map gives their views free-space votes.
+struct SeenThroughWall {
+  SeenThroughWall() {
+    pcl::PointCloud<pcl::PointXYZ> wall;
+    for (int i = -40; i <= 40; ++i)
+      for (int k = -20; k <= 20; ++k) wall.push_back(pcl::PointXYZ(20.0f, 0.05f * i, 0.05f * k));
+    map.setHistory(params.free_space.long_lag + 1);
+    for (int f = 0; f <= params.free_space.lag; ++f)
+      map.addScan(wall, Eigen::Isometry3d::Identity());
+    for (int i = -4; i <= 4; ++i)
+      for (int k = -4; k <= 4; ++k) points.emplace_back(10.0f, 0.05f * i, 0.1f * k);
+    decision.setParameters(params);
+    decision.setFreeSpaceMap(&map);
+  }
+  SeenThroughWall(const SeenThroughWall&) = delete;  // the decision points to this map
+  SeenThroughWall& operator=(const SeenThroughWall&) = delete;
+
+  const DetectorParameters params;
+  pcl_movers::FreeSpaceMap map;
+  std::vector<Eigen::Vector3f> points;
+  MoverDecision decision;
+};
+
 }  // namespace
 
 TEST(MoverDecision, VotesFastOnlyForALineFasterThanTheThresholdBeyondItsScatter) {
@@ -208,19 +232,10 @@ TEST(MoverDecision, APorousViewGivesNoFreeSpaceVote) {
   // Every stored scan saw a wall 20 m ahead, so the track's points 10 m ahead fill space seen
   // through: a solid view gets its free-space votes and is a mover. Foliage is seen through
   // wherever it stands, so a view as rough as a tree's (free_space.porous_roughness) gets none.
-  pcl::PointCloud<pcl::PointXYZ> wall;
-  for (int i = -40; i <= 40; ++i)
-    for (int k = -20; k <= 20; ++k) wall.push_back(pcl::PointXYZ(20.0f, 0.05f * i, 0.05f * k));
-  pcl_movers::FreeSpaceMap map;
-  const DetectorParameters params;
-  map.setHistory(params.free_space.long_lag + 1);
-  for (int f = 0; f <= params.free_space.lag; ++f) map.addScan(wall, Eigen::Isometry3d::Identity());
-  std::vector<Eigen::Vector3f> points;
-  for (int i = -4; i <= 4; ++i)
-    for (int k = -4; k <= 4; ++k) points.emplace_back(10.0f, 0.05f * i, 0.1f * k);
-  MoverDecision decision;
-  decision.setParameters(params);
-  decision.setFreeSpaceMap(&map);
+  const SeenThroughWall scene;
+  const DetectorParameters& params = scene.params;
+  const MoverDecision& decision = scene.decision;
+  const std::vector<Eigen::Vector3f>& points = scene.points;
   for (const double roughness : {0.04, 0.5}) {
     Track t = votedFastTrack();
     t.features.roughness = roughness;
@@ -232,22 +247,13 @@ TEST(MoverDecision, APorousViewGivesNoFreeSpaceVote) {
 }
 
 TEST(MoverDecision, PorousIsJudgedOnTheMedianOfTheRecentViews) {
-  // The same seen-through wall as above. A bush's views flicker around the roughness bound: its
+  // The seen-through wall of the test above. A bush's views flicker around the roughness bound: its
   // smoother views must not collect the votes its rougher ones are denied. A solid object with
   // one rough view among smooth ones keeps its votes.
-  pcl::PointCloud<pcl::PointXYZ> wall;
-  for (int i = -40; i <= 40; ++i)
-    for (int k = -20; k <= 20; ++k) wall.push_back(pcl::PointXYZ(20.0f, 0.05f * i, 0.05f * k));
-  pcl_movers::FreeSpaceMap map;
-  const DetectorParameters params;
-  map.setHistory(params.free_space.long_lag + 1);
-  for (int f = 0; f <= params.free_space.lag; ++f) map.addScan(wall, Eigen::Isometry3d::Identity());
-  std::vector<Eigen::Vector3f> points;
-  for (int i = -4; i <= 4; ++i)
-    for (int k = -4; k <= 4; ++k) points.emplace_back(10.0f, 0.05f * i, 0.1f * k);
-  MoverDecision decision;
-  decision.setParameters(params);
-  decision.setFreeSpaceMap(&map);
+  const SeenThroughWall scene;
+  const DetectorParameters& params = scene.params;
+  const MoverDecision& decision = scene.decision;
+  const std::vector<Eigen::Vector3f>& points = scene.points;
   const double bound = params.free_space.porous_roughness;
   const auto decideViews = [&](const std::vector<double>& roughness) {
     Track t = votedFastTrack();

@@ -77,6 +77,13 @@ SampleFrames simulateFrames(pcl_movers::sim::LidarSimulator& simulator, int fram
   return f;
 }
 
+/** Every frame of the scenario given as YAML text (`name` in its error messages), in memory. */
+SampleFrames simulateScenario(const std::string& yaml, const std::string& name) {
+  const pcl_movers::sim::Scenario scenario = pcl_movers::sim::parseScenario(yaml, name);
+  pcl_movers::sim::LidarSimulator simulator(scenario);
+  return simulateFrames(simulator, scenario.frames);
+}
+
 SampleFrames simulateSample(int frames) {
   const std::string path = std::string(PCL_MOVERS_SOURCE_DIR) + "/data/scenarios/sample.yaml";
   pcl_movers::sim::LidarSimulator simulator(pcl_movers::sim::loadScenario(path));
@@ -492,8 +499,7 @@ ego: {start: [0, 0], heading: 0, speed: 0}
 movers:
   - {type: car, start: [36, -16], heading: 90, speed: 8}
 )";
-  pcl_movers::sim::LidarSimulator simulator(pcl_movers::sim::parseScenario(yaml, "one_beam"));
-  const SampleFrames f = simulateFrames(simulator, 40);
+  const SampleFrames f = simulateScenario(yaml, "one_beam");
   double tallest_slice = 0;
   for (const auto& scan : f.scans) {
     float lo = 1e9f, hi = -1e9f;  // the car's returns (everything above the road)
@@ -540,8 +546,7 @@ statics:
   - {type: wall, position: [20, 0], yaw: 90, size: [30, 0.3, 2.5]}
   - {type: person, position: [19.25, 5], yaw: 180}
 )";
-  pcl_movers::sim::LidarSimulator simulator(pcl_movers::sim::parseScenario(yaml, "walker_by_wall"));
-  const SampleFrames f = simulateFrames(simulator, 60);
+  const SampleFrames f = simulateScenario(yaml, "walker_by_wall");
   const auto walkerAt = [](int frame) { return Eigen::Vector2d(19.25, -6 + 0.1 * frame); };
   for (const bool split : {false, true}) {
     pcl_movers::DetectorParameters params;
@@ -588,8 +593,7 @@ statics:
   - {type: car, position: [11.5, 11], yaw: 0}
   - {type: car, position: [11.5, -11], yaw: 0}
 )";
-  pcl_movers::sim::LidarSimulator simulator(pcl_movers::sim::parseScenario(yaml, "edges"));
-  const SampleFrames f = simulateFrames(simulator, 2);
+  const SampleFrames f = simulateScenario(yaml, "edges");
   ASSERT_GT(f.scans[0]->height, 1u);  // organized: the detector takes its columns as they are
   Detector detector;
   detector.setParameters(pcl_movers::DetectorParameters());
