@@ -69,9 +69,12 @@ pcl_movers::tools::OptionTable optionTable() {
         d.sensor},
        {"", "", "\nGround removal:"}});
   table.add(d.ground.options());
-  table.add({{"--baseline", "M",
-              "the height-threshold baseline calls z < -sensor_height + M ground", str(d.baseline)},
-             {"", "", "\nSegmentation:"}});
+  table.add(
+      {{"--baseline", "M",
+        "the height-threshold baseline calls z < -sensor_height + M ground (the sensor height the "
+        "filter used)",
+        str(d.baseline)},
+       {"", "", "\nSegmentation:"}});
   table.add(d.segment.options());
   table.add(
       {{"", "", "\nScoring:"},
@@ -213,6 +216,7 @@ void scoreFrame(const Frame& frame, const Options& opt, Result& result) {
     f.setNegative(true);
   };
   std::vector<std::uint8_t> is_ground(n, 0), is_baseline(n, 0);
+  float sensor_height = opt.ground.parameters.sensor_height;  // 0: the filter's estimate
   {
     pcl_movers::GroundPlaneFilter<Point> ground_filter;
     configure(ground_filter);
@@ -221,6 +225,7 @@ void scoreFrame(const Frame& frame, const Options& opt, Result& result) {
     t0 = std::chrono::steady_clock::now();
     ground_filter.filter(ground);
     result.ground_ms += msSince(t0);
+    sensor_height = ground_filter.getUsedSensorHeight();
     for (const auto c : ground)
       if (index_image[c] >= 0) is_ground[index_image[c]] = 1;
   }
@@ -235,7 +240,7 @@ void scoreFrame(const Frame& frame, const Options& opt, Result& result) {
     for (const auto i : ground)
       if (!placed[i]) is_ground[i] = 1;
   }
-  const float z0 = cloud->sensor_origin_.z() - opt.ground.parameters.sensor_height + opt.baseline;
+  const float z0 = cloud->sensor_origin_.z() - sensor_height + opt.baseline;
   for (std::size_t i = 0; i < n; ++i) is_baseline[i] = (*cloud)[i].z < z0;
   const auto truth = pcl_movers::eval::groundTruthFromLabels(labels);
   const auto frame_score = pcl_movers::eval::scoreGround(truth, is_ground);
@@ -375,12 +380,14 @@ int run(int argc, char** argv) {
                   g.range_noise, g.slope_band);
   std::printf(
       "Ground: GroundPlaneFilter on the range image (distance %g m, tilt %.1f°, %d sectors, %s) "
-      "vs. a height threshold z < %g m. Objects: ground removed, RangeImageRegionGrowing (k = %g, "
+      "vs. a height threshold %g m above the ground under the sensor (%s). Objects: ground "
+      "removed, RangeImageRegionGrowing (k = %g, "
       "floor %g m, gap %d, row bridge %g m, clusters of >= %d points); instances with >= %d "
       "points, recovered = one cluster holds >= %g %% of them. These are the defaults of "
       "GroundParameters and SegmentationParameters, which pcl_movers_ground, pcl_movers_segment "
       "and pcl_movers_detect share.\n\n",
-      g.distance, g.max_slope_deg, g.sectors, slope_text, -g.sensor_height + opt.baseline,
+      g.distance, g.max_slope_deg, g.sectors, slope_text, opt.baseline,
+      g.sensor_height > 0 ? "the set sensor height" : "the sensor height the filter estimated",
       sp.depth_ratio, sp.depth_min, sp.max_gap, sp.row_bridge, sp.min_cluster_points,
       opt.min_points, 100.0 * opt.min_fraction);
   std::printf(

@@ -69,6 +69,26 @@ void FreeSpaceMap::clearRange(Scan& s) const {
       std::fill_n(s.range.begin() + static_cast<std::ptrdiff_t>(r * cols), cols, 0.0f);
 }
 
+void FreeSpaceMap::fillDropouts(Scan& s) const {
+  // A ray that returned nothing between two that returned at about the same range is a dropout
+  // (a dark or grazing spot, a lost packet), not something closer than the sensor's minimum
+  // range: that silences a run of rays. It is given the nearer of its neighbours' ranges, the
+  // surface it most likely missed, so that it neither vetoes its windows as a lost return nor
+  // opens a gap in that surface.
+  const auto cols = static_cast<std::size_t>(cols_);
+  for (std::size_t r = 0; r < s.sampled_rows.size(); ++r) {
+    if (!s.sampled_rows[r]) continue;
+    float* row = s.range.data() + r * cols;
+    for (std::size_t c = 0; c < cols; ++c) {
+      if (row[c] != 0.0f) continue;
+      const float left = row[c == 0 ? cols - 1 : c - 1], right = row[c + 1 == cols ? 0 : c + 1];
+      const float nearer = std::min(left, right);
+      if (nearer > 0.0f && std::abs(left - right) <= static_cast<float>(margin(nearer)))
+        row[c] = nearer;
+    }
+  }
+}
+
 void FreeSpaceMap::addBlindScan() {
   if (scans_.size() >= static_cast<std::size_t>(history_)) scans_.pop_back();
   scans_.emplace_front();

@@ -709,3 +709,39 @@ TEST(GroundPlaneFilter, CurvedFarCellsKeepAPlaneThatLoweringWouldRaise) {
   EXPECT_EQ(worse, 0);
   EXPECT_GT(precision_change / scenes, -0.002);
 }
+
+TEST(GroundPlaneFilter, EstimatesTheSensorHeightBesideParkedCars) {
+  // A sensor mounted 2.4 m high (not KITTI's 1.73 m) in a car park: rows of cars 3-12 m around
+  // it, whose roofs and bonnets make dense layers 0.9-1.4 m below the sensor. The ground is the
+  // deepest dense layer, and its depth is the height the filter starts from.
+  constexpr float kMount = 2.4f;
+  std::vector<float> beams;
+  for (float b = 24.9f; b > 1.2f; b -= (b > 8.f ? 0.5f : 0.35f)) beams.push_back(b);
+  auto z_of = [](float, float) { return -kMount; };
+  auto cars = [](float x, float y) {
+    const float r = std::hypot(x, y);
+    const bool row = (r > 3.f && r < 4.8f) || (r > 7.f && r < 8.8f) || (r > 10.5f && r < 12.3f);
+    const float a = std::atan2(y, x) * 180.f / float(M_PI) + 180.f;
+    return row && std::fmod(a, 30.f) < 24.f ? 1.5f : 0.f;  // cars with gaps between them
+  };
+  const Scene scene = castLines(z_of, cars, 3.f, 1.f, beams, 3.f, 7);
+  GroundPlaneFilter<pcl::PointXYZ> filter;
+  filter.setInputCloud(scene.cloud);
+  filter.setNegative(true);
+  pcl::Indices ground;
+  filter.filter(ground);
+  EXPECT_EQ(filter.getSensorHeight(), 0.f);  // the default: estimate
+  EXPECT_NEAR(filter.getUsedSensorHeight(), kMount, 0.05f);
+  const Score s = score(scene, ground);
+  EXPECT_GT(s.recall, 0.95);
+  EXPECT_GT(s.precision, 0.95);
+
+  // A scan without near returns (a blind frame) keeps the last estimate; a set height is used.
+  filter.setInputCloud(Cloud::Ptr(new Cloud));
+  filter.filter(ground);
+  EXPECT_NEAR(filter.getUsedSensorHeight(), kMount, 0.05f);
+  filter.setSensorHeight(1.73f);
+  filter.setInputCloud(scene.cloud);
+  filter.filter(ground);
+  EXPECT_EQ(filter.getUsedSensorHeight(), 1.73f);
+}

@@ -163,6 +163,9 @@ class FreeSpaceMap {
    * (not finite, under 0.5 m, outside the rows); ranges[i] = its range. */
   void computeCells(const float* xs, const float* ys, const float* zs, std::size_t n, int* cells,
                     float* ranges) const;
+  /** \brief Fills each silent cell of `s.range` whose two azimuth neighbours returned at
+   * about the same range (a dropout) with the nearer of their ranges. */
+  void fillDropouts(Scan& s) const;
   /** \brief Sets every cell of `s.range` to 0 (no return) for a new scan: only the rows that
    * the scan whose memory it reuses wrote, when the layout is the same (a sensor's beams cover
    * a fraction of the rows; the others are still clear). */
@@ -339,6 +342,7 @@ void FreeSpaceMap::addScan(const pcl::PointCloud<PointT>& scan, const Eigen::Iso
       s.min_range = std::min(s.min_range, ranges[i]);
     }
   }
+  fillDropouts(s);
   scans_.push_front(std::move(s));
   indexBeamRows();
   if (pool_on_add_) poolScan(scans_.front());

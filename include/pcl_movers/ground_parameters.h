@@ -21,8 +21,11 @@ namespace pcl_movers {
  */
 struct GroundParameters {
   /// Height of the sensor above the ground under it [m] (KITTI's HDL-64E: 1.73); the innermost
-  /// cells start from a horizontal plane this far below the cloud's sensor origin.
-  double sensor_height = 1.73;
+  /// cells start from a horizontal plane this far below the cloud's sensor origin. 0: estimated
+  /// from each scan (the densest thin layer of returns within 15 m below the sensor): mounting
+  /// heights differ by a metre between vehicles (the corpus: 1.54-2.47 m), and a plane started
+  /// 0.7 m too high on rolling terrain lost a fifth of the ground (docs/design.md, decision log).
+  double sensor_height = 0.0;
   /// Points closer than this to their cell's plane are ground [m].
   double distance = 0.1;
   /// Steepest plane still taken for ground [deg]; steeper fits inherit the inner cell's plane.
@@ -60,7 +63,8 @@ struct GroundParameters {
    * parameters and of the tools' options). */
   template <typename F>
   void forEachParameter(F&& f) {
-    f("sensor_height", sensor_height, "sensor height above the ground under it [m]");
+    f("sensor_height", sensor_height,
+      "sensor height above the ground under it [m]; 0 = estimated from each scan");
     f("distance", distance, "ground if within this of its cell's plane [m]");
     f("max_slope_deg", max_slope_deg, "steepest plane taken for ground [deg]");
     f("local_slope", local_slope, "column local-slope test on organized scans");

@@ -126,9 +126,13 @@ class GroundPlaneFilter : public pcl::FilterIndices<PointT> {
   float getMaxSlopeChange() const { return max_slope_change_; }
 
   /** \brief Height of the sensor above the ground under it [m]; the innermost cells start from
-   * a horizontal plane this far below `sensor_origin_`. */
+   * a horizontal plane this far below `sensor_origin_`. 0 (the default): estimated from each
+   * scan as the depth of the densest thin layer of returns within 15 m below the sensor
+   * (getUsedSensorHeight()), since mounting heights differ by a metre between vehicles. */
   void setSensorHeight(float height) { sensor_height_ = height; }
   float getSensorHeight() const { return sensor_height_; }
+  /** \brief The sensor height the last run started from: the set one, or the estimate. */
+  float getUsedSensorHeight() const { return used_sensor_height_; }
 
   /** \brief Number of equal azimuth sectors. */
   void setNumSectors(int sectors) { num_sectors_ = sectors; }
@@ -200,6 +204,10 @@ class GroundPlaneFilter : public pcl::FilterIndices<PointT> {
   bool fitPlane(const std::vector<int>& positions, const Plane& prior, float band,
                 const Eigen::Vector2f& centre, std::uint32_t seed, Plane& fitted);
 
+  /** \brief The depth below `origin` of the densest thin layer of near returns (the ground
+   * under the sensor); the last estimate when the scan has too few near returns. */
+  float estimateSensorHeight(const Eigen::Vector3f& origin);
+
   /** \brief Ring of a horizontal distance r (binary search over ring_edges_). */
   int ringOf(float r) const;
   /** \brief Radial size of a ring [m] (the open outermost one: as deep as the ring inside it). */
@@ -211,6 +219,7 @@ class GroundPlaneFilter : public pcl::FilterIndices<PointT> {
   float max_step_ = 0.5f;
   float max_slope_change_ = 0.1f;
   float sensor_height_;
+  float used_sensor_height_ = 1.73f;  ///< before any estimate: KITTI's HDL-64E mounting
   int num_sectors_;
   std::vector<float> ring_edges_{0.f,   6.f,  8.f,  10.f, 12.5f, 15.f, 18.f, 21.5f,
                                  25.5f, 30.f, 35.f, 41.f, 48.f,  57.f, 68.f, 82.f};
@@ -230,6 +239,8 @@ class GroundPlaneFilter : public pcl::FilterIndices<PointT> {
   std::vector<Eigen::Vector3f> cell_xyz_;
   std::vector<float> height_;  ///< per point of the input: height above its plane, NaN if unused
   std::vector<std::uint8_t> steep_;  ///< per point: the local-slope test flagged it
+  std::vector<int> depth_bins_;      ///< near returns per depth layer (sensor-height estimate)
+  std::vector<float> depths_;        ///< depths of the densest layer's returns
   std::vector<int> positions_;       ///< candidates of the current cell (into cell_xyz_)
   std::vector<int> candidates_;      ///< the same before the floating-plane test trims them
   std::vector<float> sample_x_, sample_y_, sample_z_;  ///< RANSAC subsample, flat per axis

@@ -208,6 +208,53 @@ bool GroundPlaneFilter<PointT>::fitPlane(const std::vector<int>& positions, cons
 }
 
 template <typename PointT>
+float GroundPlaneFilter<PointT>::estimateSensorHeight(const Eigen::Vector3f& origin) {
+  // Depths below the sensor of the points within kNearRange, in kBin steps: near the sensor the
+  // ground holds most returns of any sensor that looks down (a spinning LiDAR's lower beams, a
+  // tilted 2-D ladar), in one thin layer, while walls, cars and people spread over many layers.
+  // kNearRange reaches a VLP-16's lowest beams mounted 2.5 m high (they meet the ground 9-17 m
+  // out); the densest 0.3 m layer (three bins) is the ground, its median depth the height.
+  constexpr float kNearRange = 15.f, kBin = 0.1f, kMaxDepth = 5.f;
+  constexpr int kBins = static_cast<int>(kMaxDepth / kBin);
+  depth_bins_.assign(kBins, 0);
+  const int rings = static_cast<int>(ring_edges_.size());
+  int last = 0;  // cells [0, last) are the rings within kNearRange
+  for (int ring = 0; ring < rings && ring_edges_[ring] < kNearRange; ++ring)
+    last = (ring + 1) * num_sectors_;
+  const int end = cell_start_[last];
+  // The bin of a return, -1 for none; checked as an int (depth / kBin rounds up to kBins just
+  // below kMaxDepth), and computed the same way in both passes.
+  auto binOf = [&](const Eigen::Vector3f& p) {
+    const float depth = origin.z() - p.z();
+    const float dx = p.x() - origin.x(), dy = p.y() - origin.y();
+    const int bin = depth > 0.f && depth < kMaxDepth ? static_cast<int>(depth / kBin) : -1;
+    return bin < kBins && dx * dx + dy * dy < kNearRange * kNearRange ? bin : -1;
+  };
+  for (int j = 0; j < end; ++j) {
+    const int bin = binOf(cell_xyz_[j]);
+    if (bin >= 0) ++depth_bins_[bin];
+  }
+  auto layer = [this](int b) { return depth_bins_[b - 1] + depth_bins_[b] + depth_bins_[b + 1]; };
+  int best_count = 0;
+  for (int b = 1; b + 1 < kBins; ++b) best_count = std::max(best_count, layer(b));
+  // Too few returns to tell (a blind frame, a sensor that does not look down): the last
+  // estimate, or KITTI's mounting height before the first.
+  if (best_count < min_points_per_cell_) return used_sensor_height_;
+  // Nothing lies under the ground: of the dense layers (at least an eighth of the densest) take
+  // the deepest, at its peak. In a car park the roofs and bonnets within 15 m can outnumber the
+  // ground four to one; what lies below the ground (multipath, a ditch) is sparse.
+  int best = kBins - 2;
+  while (best > 1 && 8 * layer(best) < best_count) --best;
+  while (best > 1 && layer(best - 1) > layer(best)) --best;
+  depths_.clear();
+  for (int j = 0; j < end; ++j)
+    if (std::abs(binOf(cell_xyz_[j]) - best) <= 1) depths_.push_back(origin.z() - cell_xyz_[j].z());
+  auto middle = depths_.begin() + depths_.size() / 2;
+  std::nth_element(depths_.begin(), middle, depths_.end());
+  return *middle;
+}
+
+template <typename PointT>
 void GroundPlaneFilter<PointT>::applyFilter(pcl::Indices& indices) {
   indices.clear();
   removed_indices_->clear();
@@ -306,9 +353,10 @@ void GroundPlaneFilter<PointT>::applyFilter(pcl::Indices& indices) {
            0.5f * (ring_edges_[ring] - (ring > 0 ? ring_edges_[ring - 1] : 0.f));
   };
 
+  used_sensor_height_ = sensor_height_ > 0.f ? sensor_height_ : estimateSensorHeight(origin);
   Plane start;
   start.normal = Eigen::Vector3f::UnitZ();
-  start.d = -(origin.z() - sensor_height_);
+  start.d = -(origin.z() - used_sensor_height_);
   std::vector<int>& positions = positions_;  // of the candidates in cell_xyz_
 
   for (int ring = 0; ring < rings; ++ring) {

@@ -341,7 +341,9 @@ bool MoverDetector<PointT>::addToFreeSpaceMap(const PointCloud& organized,
   free_space_.setHistory(std::max(p.free_space.lag, p.free_space.long_lag) + 1);
   free_space_.setMargin(p.free_space.margin, p.free_space.margin_per_metre);
   free_space_.setNoReturnRange(p.free_space.no_return ? p.track.max_range : 0.0);
-  free_space_.setSensorHeight(p.ground.sensor_height);
+  // The height the ground filter started from (the estimate, unless one was set).
+  free_space_.setSensorHeight(ground_.object ? ground_.object->getUsedSensorHeight()
+                                             : p.ground.sensor_height);
   free_space_.setPoolOnAdd(p.free_space.split);  // the split judges every cluster
   free_space_.addScan(organized, pose);
   tracker_.setFreeSpaceMap(&free_space_);
