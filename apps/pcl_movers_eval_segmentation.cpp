@@ -216,7 +216,7 @@ void scoreFrame(const Frame& frame, const Options& opt, Result& result) {
     f.setNegative(true);
   };
   std::vector<std::uint8_t> is_ground(n, 0), is_baseline(n, 0);
-  float sensor_height = opt.ground.parameters.sensor_height;  // 0: the filter's estimate
+  float sensor_height = 0.f;  // the height the filter started from: the set one or its estimate
   {
     pcl_movers::GroundPlaneFilter<Point> ground_filter;
     configure(ground_filter);

@@ -22,7 +22,7 @@ namespace pcl_movers {
 struct GroundParameters {
   /// Height of the sensor above the ground under it [m] (KITTI's HDL-64E: 1.73); the innermost
   /// cells start from a horizontal plane this far below the cloud's sensor origin. 0: estimated
-  /// from each scan (the densest thin layer of returns within 15 m below the sensor): mounting
+  /// from each scan (the deepest dense layer of returns within 15 m below the sensor): mounting
   /// heights differ by a metre between vehicles (the corpus: 1.54-2.47 m), and a plane started
   /// 0.7 m too high on rolling terrain lost a fifth of the ground (docs/design.md, decision log).
   double sensor_height = 0.0;

@@ -127,7 +127,7 @@ class GroundPlaneFilter : public pcl::FilterIndices<PointT> {
 
   /** \brief Height of the sensor above the ground under it [m]; the innermost cells start from
    * a horizontal plane this far below `sensor_origin_`. 0 (the default): estimated from each
-   * scan as the depth of the densest thin layer of returns within 15 m below the sensor
+   * scan as the depth of the deepest dense layer of returns within 15 m below the sensor
    * (getUsedSensorHeight()), since mounting heights differ by a metre between vehicles. */
   void setSensorHeight(float height) { sensor_height_ = height; }
   float getSensorHeight() const { return sensor_height_; }
@@ -204,7 +204,7 @@ class GroundPlaneFilter : public pcl::FilterIndices<PointT> {
   bool fitPlane(const std::vector<int>& positions, const Plane& prior, float band,
                 const Eigen::Vector2f& centre, std::uint32_t seed, Plane& fitted);
 
-  /** \brief The depth below `origin` of the densest thin layer of near returns (the ground
+  /** \brief The depth below `origin` of the deepest dense layer of near returns (the ground
    * under the sensor); the last estimate when the scan has too few near returns. */
   float estimateSensorHeight(const Eigen::Vector3f& origin);
 

@@ -213,7 +213,8 @@ float GroundPlaneFilter<PointT>::estimateSensorHeight(const Eigen::Vector3f& ori
   // ground holds most returns of any sensor that looks down (a spinning LiDAR's lower beams, a
   // tilted 2-D ladar), in one thin layer, while walls, cars and people spread over many layers.
   // kNearRange reaches a VLP-16's lowest beams mounted 2.5 m high (they meet the ground 9-17 m
-  // out); the densest 0.3 m layer (three bins) is the ground, its median depth the height.
+  // out). The ground is the deepest dense 0.3 m layer (three bins, see below), its median depth
+  // the height.
   constexpr float kNearRange = 15.f, kBin = 0.1f, kMaxDepth = 5.f;
   constexpr int kBins = static_cast<int>(kMaxDepth / kBin);
   depth_bins_.assign(kBins, 0);
