@@ -270,3 +270,42 @@ TEST(MoverDecision, PorousIsJudgedOnTheMedianOfTheRecentViews) {
   const Track car = decideViews({0.2 * bound, 1.5 * bound, 0.2 * bound, 0.2 * bound});
   EXPECT_TRUE(car.mover);
 }
+
+TEST(MoverDecision, ASpeedVoteWithMostOfItsViewSeenThroughIsAMoverAtOnce) {
+  // The seen-through wall above: one update's view whose points all lie in space the scan
+  // free_space.lag frames back saw empty, with that update's speed vote, is a mover before the
+  // free-space votes of the window add up (`free_space`); each of the rule's conditions alone
+  // withholds it.
+  const SeenThroughWall scene;
+  const DetectorParameters& params = scene.params;
+  ASSERT_GT(params.free_space.votes, 1);  // else the vote count would pass at the first update
+  const auto decideOnce = [&](Track t, const std::vector<Eigen::Vector3f>& points) {
+    scene.decision.decide(t, points, {});
+    return t;
+  };
+  const Track seen = decideOnce(votedFastTrack(), scene.points);
+  EXPECT_TRUE(seen.mover);
+  EXPECT_EQ(seen.reason, MoverReason::kFreeSpace);
+
+  Track no_vote = votedFastTrack();
+  no_vote.fast.back() = 0;  // still three votes of five, but none from this update
+  EXPECT_FALSE(decideOnce(no_vote, scene.points).mover);
+
+  Track occluded = votedFastTrack();
+  occluded.features.occluded = true;
+  EXPECT_FALSE(decideOnce(occluded, scene.points).mover);
+
+  // Seen only above what hides it: a parked car's top rising into a sensor's lowest beams.
+  Track never_tall = votedFastTrack();
+  never_tall.max_height = never_tall.features.height = 0.5;
+  EXPECT_FALSE(decideOnce(never_tall, scene.points).mover);
+
+  // Half of the view on the wall where the stored scans saw it, less than alone_fraction seen
+  // through once a few more points lie there.
+  std::vector<Eigen::Vector3f> on_wall = scene.points;
+  for (int k = 0; k < static_cast<int>(scene.points.size()) + 5; ++k)
+    on_wall.emplace_back(20.0f, 0.05f * (k % 9 - 4), 0.1f * (k / 9 - 4));
+  const Track half = decideOnce(votedFastTrack(), on_wall);
+  EXPECT_FALSE(half.mover);
+  EXPECT_EQ(half.reason, MoverReason::kNoFreeSpace);
+}

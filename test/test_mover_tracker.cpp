@@ -369,7 +369,8 @@ TEST(MoverTracker, EveryDecisionGivesItsReason) {
   using pcl_movers::MoverReason;
   auto is_mover_reason = [](MoverReason r) {
     return r == MoverReason::kFast || r == MoverReason::kWellMeasured ||
-           r == MoverReason::kSustained || r == MoverReason::kLatched;
+           r == MoverReason::kSustained || r == MoverReason::kFreeSpace ||
+           r == MoverReason::kLatched;
   };
   Tracker tracker;
   tracker.setParameters(defaults());

@@ -21,8 +21,11 @@ namespace pcl_movers {
  * evidence are needed: kinematic (fastMotion(), wellMeasuredMotion() or sustainedMotion()) and
  * free space (freeSpaceEvidence(), slowFreeSpaceEvidence(): the object fills space an earlier scan
  * saw through, or its earlier surface is seen through now), which no static object can give
- * whatever its registration or segmentation errors. Reads the `decision.*` and `free_space.*`
- * settings (and track.registration_sigma, track.gate_margin) of DetectorParameters. */
+ * whatever its registration or segmentation errors. A track that fails the vote counts is still
+ * a mover, `free_space`, when this update gives both kinds at once: its speed vote or sustained
+ * line, and most of its view in space seen empty (fillsFreeSpace()). Reads the `decision.*` and
+ * `free_space.*` settings (and track.registration_sigma, track.gate_margin) of DetectorParameters.
+ */
 class MoverDecision {
  public:
   void setParameters(const DetectorParameters& parameters) { parameters_ = parameters; }
@@ -76,6 +79,13 @@ class MoverDecision {
    * free_space.lag frames, no more than the margin, so a pass at that lag says little; over
    * 1.5 s it has moved 0.9 m. Sets track.free_space. */
   bool slowFreeSpaceEvidence(Track& track, const std::vector<Eigen::Vector3f>& points) const;
+  /** \brief This update's view shows motion by itself: the track has decision.min_age updates,
+   * was seen at least once decision.min_height tall, none of its last decision.window views
+   * porous (free_space.porous_roughness) and this one not occluded, and
+   * free_space.alone_fraction of the view's judged points (at least free_space.min_points) lie
+   * in space the scan free_space.lag frames ago saw empty. decide() asks it, with this update's
+   * speed vote or sustained line, of a track that fails the vote counts. */
+  bool fillsFreeSpace(const Track& track, const std::vector<Eigen::Vector3f>& points) const;
   /** \brief Whether free_space.lag frames are too short to show the track's motion: at its
    * speed it covers less than twice the free-space margin at its range in that time (a walker
    * at 1.3 m/s 30 m away: 0.65 m against a 0.6 m margin), so that scan saw the object's own

@@ -38,15 +38,16 @@ enum class MoverReason : std::uint8_t {
   kFast,          ///< mover: speed votes and free-space evidence
   kWellMeasured,  ///< mover while young: its displacement beyond doubt and seen through
   kSustained,     ///< mover: sustained slow motion (slow_window) and free-space evidence
-  kLatched        ///< mover: confirmed by decision.window decisions in a row (decision.latch)
+  kFreeSpace,  ///< mover: most of its view fills space seen empty (MoverDecision::fillsFreeSpace)
+  kLatched     ///< mover: confirmed by decision.window decisions in a row (decision.latch)
 };
 
 /** \brief The name of a reason as tracks.csv writes it: new, large, young, low, no_motion,
- * no_free_space, fast, well_measured, sustained, latched. */
+ * no_free_space, fast, well_measured, sustained, free_space, latched. */
 inline const char* moverReasonName(MoverReason reason) {
-  static const char* const names[] = {"new",       "large",         "young", "low",
-                                      "no_motion", "no_free_space", "fast",  "well_measured",
-                                      "sustained", "latched"};
+  static const char* const names[] = {"new",       "large",         "young",  "low",
+                                      "no_motion", "no_free_space", "fast",   "well_measured",
+                                      "sustained", "free_space",    "latched"};
   return names[static_cast<int>(reason)];
 }
 
