@@ -300,6 +300,11 @@ TEST(MoverDecision, ASpeedVoteWithMostOfItsViewSeenThroughIsAMoverAtOnce) {
   never_tall.max_height = never_tall.features.height = 0.5;
   EXPECT_FALSE(decideOnce(never_tall, scene.points).mover);
 
+  // A centroid track (no model): its speed vote slides with its partial views.
+  Track centroid = votedFastTrack();
+  centroid.model.reset();
+  EXPECT_FALSE(decideOnce(centroid, scene.points).mover);
+
   // Half of the view on the wall where the stored scans saw it, less than alone_fraction seen
   // through once a few more points lie there.
   std::vector<Eigen::Vector3f> on_wall = scene.points;

@@ -79,7 +79,8 @@ class MoverDecision {
    * free_space.lag frames, no more than the margin, so a pass at that lag says little; over
    * 1.5 s it has moved 0.9 m. Sets track.free_space. */
   bool slowFreeSpaceEvidence(Track& track, const std::vector<Eigen::Vector3f>& points) const;
-  /** \brief This update's view shows motion by itself: the track has decision.min_age updates,
+  /** \brief This update's view shows motion by itself: the track is registered (has a model),
+   * has decision.min_age updates,
    * was seen at least once decision.min_height tall, none of its last decision.window views
    * porous (free_space.porous_roughness) and this one not occluded, and
    * free_space.alone_fraction of the view's judged points (at least free_space.min_points) lie
