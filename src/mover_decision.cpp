@@ -228,8 +228,7 @@ bool MoverDecision::freeSpaceEvidence(Track& track,
   // the margin since gives none either, so only clearly moving objects are confirmed before the
   // lag has passed (open truck, seen from frame 0: confirmed at frame 5 before, when the first
   // lag-5 scan exists).
-  const int lag = std::min(p.free_space.lag, free_space_map_->size() - 1);
-  auto ahead = lag >= 1 ? free_space_map_->test(points, lag) : FreeSpaceMap::Evidence();
+  const FreeSpaceMap::Evidence ahead = shortLagEvidence(points);
   // (b) receding: the object's earlier surface is now seen through by the current scan.
   FreeSpaceMap::Evidence behind;
   // The oldest stored view is used once and dropped: each vote tests a different earlier view,
@@ -238,10 +237,7 @@ bool MoverDecision::freeSpaceEvidence(Track& track,
     behind = free_space_map_->test(track.past_points.front(), 0);
     track.past_points.pop_front();
   }
-  const auto score = [&](const FreeSpaceMap::Evidence& e) {
-    return e.seen_through >= p.free_space.min_points ? e.fraction() : 0.0;
-  };
-  track.free_space = std::max(score(ahead), score(behind));
+  track.free_space = std::max(seenThroughFraction(ahead), seenThroughFraction(behind));
   return track.free_space >= p.free_space.min_fraction;
 }
 
@@ -269,8 +265,7 @@ bool MoverDecision::slowFreeSpaceEvidence(Track& track,
     if (e.seen_through >= p.free_space.min_points)
       behind = static_cast<double>(e.seen_through) / static_cast<double>(view.size());
   }
-  track.free_space =
-      std::max(ahead.seen_through >= p.free_space.min_points ? ahead.fraction() : 0.0, behind);
+  track.free_space = std::max(seenThroughFraction(ahead), behind);
   return track.free_space >= p.free_space.long_min_fraction;
 }
 
@@ -289,19 +284,28 @@ bool MoverDecision::fillsFreeSpace(const Track& track,
   // parked car entering a high-mounted sensor's lowest beams as it is passed fills space the
   // beams passed over before (tune split without this test: parking false alarms 0.037 -> 0.056
   // per frame, os1_64 0.035 -> 0.057).
-  const bool porous = p.free_space.porous_roughness > 0 &&
-                      std::any_of(track.roughness.begin(), track.roughness.end(),
-                                  [&](float r) { return r > p.free_space.porous_roughness; });
   // Registered tracks only, as the other shortcuts past the vote counts (wellMeasured(),
   // sustained motion): a centroid track's speed vote slides with its partial views, and with this
   // rule centroid mode gained false alarms (KITTI 0000-a 0.143 -> 0.169 per frame).
-  if (!track.model || track.hits < p.decision.min_age || porous || track.features.occluded ||
+  if (!track.model || track.hits < p.decision.min_age || track.features.occluded ||
       track.max_height < p.decision.min_height)
     return false;
-  const int lag = std::min(p.free_space.lag, free_space_map_->size() - 1);
-  if (lag < 1) return false;
-  const FreeSpaceMap::Evidence e = free_space_map_->test(points, lag);
-  return e.seen_through >= p.free_space.min_points && e.fraction() >= p.free_space.alone_fraction;
+  const bool porous = p.free_space.porous_roughness > 0 &&
+                      std::any_of(track.roughness.begin(), track.roughness.end(),
+                                  [&](float r) { return r > p.free_space.porous_roughness; });
+  if (porous) return false;
+  // With no stored scan to test against, the Evidence is empty and its fraction 0.
+  return seenThroughFraction(shortLagEvidence(points)) >= p.free_space.alone_fraction;
+}
+
+FreeSpaceMap::Evidence MoverDecision::shortLagEvidence(
+    const std::vector<Eigen::Vector3f>& points) const {
+  const int lag = std::min(parameters_.free_space.lag, free_space_map_->size() - 1);
+  return lag >= 1 ? free_space_map_->test(points, lag) : FreeSpaceMap::Evidence();
+}
+
+double MoverDecision::seenThroughFraction(const FreeSpaceMap::Evidence& evidence) const {
+  return evidence.seen_through >= parameters_.free_space.min_points ? evidence.fraction() : 0.0;
 }
 
 bool MoverDecision::shortLagTooShort(const Track& track) const {

@@ -99,6 +99,12 @@ class MoverDecision {
    * decision.confirm_false_rate. */
   bool significantLine(const std::vector<Eigen::Vector3d>& positions, double min_sigma,
                        double min_speed) const;
+  /** \brief `points` tested against the scan free_space.lag frames back, or the oldest stored
+   * one when fewer are stored (empty Evidence when there is none: the first frame). */
+  FreeSpaceMap::Evidence shortLagEvidence(const std::vector<Eigen::Vector3f>& points) const;
+  /** \brief The fraction of an Evidence's judged points seen through, 0 when fewer than
+   * free_space.min_points are: a few stray points are no evidence. */
+  double seenThroughFraction(const FreeSpaceMap::Evidence& evidence) const;
 
   DetectorParameters parameters_;
   const FreeSpaceMap* free_space_map_ = nullptr;
