@@ -130,16 +130,29 @@ class SceneBuilder {
     spec.start = {rounded(point.x() - offset.x(), 2), rounded(point.y() - offset.y(), 2)};
   }
 
-  ObjectSpec& addMover(const std::string& type, TrajectorySpec spec, double t,
-                       const Eigen::Vector2d& point) {
-    spec = normalized(spec);
-    placeAt(spec, t, point);
+  /** Adds a mover that is at `point` at time t, or up to 3 s earlier or later if it would
+   * otherwise run into a mover added before it (footprints overlapping at a frame time): solid
+   * objects do not pass through each other, and the traffic drawn lane by lane did (a faster car
+   * through a slower one in its lane, a car through a walker crossing its path), which no sensor
+   * can show as two objects. A mover that runs into another at every such time is left out.
+   * Returns whether it was added. */
+  bool addMover(const std::string& type, TrajectorySpec spec, double t,
+                const Eigen::Vector2d& point) {
     ObjectSpec o;
     o.type = type;
     o.mover = true;
-    o.trajectory = spec;
-    scenario_.objects.push_back(o);
-    return scenario_.objects.back();
+    spec = normalized(spec);
+    for (const double delay : {0.0, 1.0, -1.0, 2.0, -2.0, 3.0, -3.0}) {
+      o.trajectory = spec;
+      placeAt(o.trajectory, t + delay, point);
+      const Trajectory path(o.trajectory, duration_ + 1.0);
+      if (runsIntoAnother(o, path)) continue;
+      scenario_.objects.push_back(o);
+      mover_paths_.push_back(path);
+      mover_footprints_.push_back(footprint(o));
+      return true;
+    }
+    return false;
   }
 
   ObjectSpec& addStatic(const std::string& type, const Eigen::Vector2d& position, double yaw_deg) {
@@ -197,6 +210,48 @@ class SceneBuilder {
       scenario_.blind_frames.push_back(f);
   }
 
+  /** Length and width [m] of a mover's box as the simulator builds it (its size or the type's
+   * default, lidar_simulator.cpp). */
+  static Eigen::Vector2d footprint(const ObjectSpec& o) {
+    if (o.size.x() > 0 && o.size.y() > 0) return o.size.head<2>();
+    if (o.type == "truck") return {8.0, 2.5};
+    if (o.type == "van") return {5.0, 2.0};
+    if (o.type == "person") return {0.6, 0.6};
+    if (o.type == "cyclist") return {1.8, 0.6};
+    return {4.4, 1.8};  // car, and the ego vehicle
+  }
+
+  /** True when the mover's footprint overlaps an added mover's at a frame time. */
+  bool runsIntoAnother(const ObjectSpec& o, const Trajectory& path) const {
+    const Eigen::Vector2d size = footprint(o);
+    const double dt = 1.0 / scenario_.rate_hz;
+    for (int f = 0; f < scenario_.frames; ++f) {
+      const Trajectory::State s = path.at(f * dt);
+      for (std::size_t i = 0; i < mover_paths_.size(); ++i)
+        if (boxesOverlap(s, size, mover_paths_[i].at(f * dt), mover_footprints_[i])) return true;
+    }
+    return false;
+  }
+
+  /** Separating-axis test of two footprints (centre, heading; length along it, width across). */
+  static bool boxesOverlap(const Trajectory::State& a, const Eigen::Vector2d& size_a,
+                           const Trajectory::State& b, const Eigen::Vector2d& size_b) {
+    const Eigen::Vector2d d = b.position - a.position;
+    if (d.norm() > 0.5 * (size_a.norm() + size_b.norm())) return false;
+    const Eigen::Vector2d axes[4] = {direction(a.heading), direction(a.heading + M_PI / 2),
+                                     direction(b.heading), direction(b.heading + M_PI / 2)};
+    const auto halfExtent = [](const Eigen::Vector2d& axis, double heading,
+                               const Eigen::Vector2d& size) {
+      return 0.5 * (size.x() * std::abs(axis.dot(direction(heading))) +
+                    size.y() * std::abs(axis.dot(direction(heading + M_PI / 2))));
+    };
+    for (const Eigen::Vector2d& axis : axes)
+      if (std::abs(axis.dot(d)) >
+          halfExtent(axis, a.heading, size_a) + halfExtent(axis, b.heading, size_b))
+        return false;
+    return true;
+  }
+
   void drawSensor() {
     SensorSpec& s = scenario_.sensor;
     s.preset = sensorOfSeed(scenario_.seed);
@@ -211,6 +266,8 @@ class SceneBuilder {
   Draw draw_;
   Scenario scenario_;
   Trajectory ego_path_;
+  std::vector<Trajectory> mover_paths_;  ///< of the movers added so far, in their order
+  std::vector<Eigen::Vector2d> mover_footprints_;
   double duration_ = 15.0;
 };
 
