@@ -130,12 +130,12 @@ class SceneBuilder {
     spec.start = {rounded(point.x() - offset.x(), 2), rounded(point.y() - offset.y(), 2)};
   }
 
-  /** Adds a mover that is at `point` at time t, or up to 3 s earlier or later if it would
-   * otherwise run into a mover added before it (footprints overlapping at a frame time): solid
-   * objects do not pass through each other, and the traffic drawn lane by lane did (a faster car
-   * through a slower one in its lane, a car through a walker crossing its path), which no sensor
-   * can show as two objects. A mover that runs into another at every such time is left out.
-   * Returns whether it was added. */
+  /** Adds a mover that is at `point` at time t, or up to 3 s earlier (not before the scene's
+   * start) or later if it would otherwise run into a mover added before it (footprints
+   * overlapping at a frame time): solid objects do not pass through each other, and the traffic
+   * drawn lane by lane did (a faster car through a slower one in its lane, a car through a walker
+   * crossing its path), which no sensor can show as two objects. A mover that runs into another
+   * at every such time is left out. Returns whether it was added. */
   bool addMover(const std::string& type, TrajectorySpec spec, double t,
                 const Eigen::Vector2d& point) {
     ObjectSpec o;
@@ -218,7 +218,7 @@ class SceneBuilder {
     if (o.type == "van") return {5.0, 2.0};
     if (o.type == "person") return {0.6, 0.6};
     if (o.type == "cyclist") return {1.8, 0.6};
-    return {4.4, 1.8};  // car, and the ego vehicle
+    return {4.4, 1.8};  // car
   }
 
   /** True when the mover's footprint overlaps an added mover's at a frame time. */
