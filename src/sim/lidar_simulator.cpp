@@ -247,11 +247,6 @@ std::string gtClass(const std::string& type) {
 /** Builds the primitives of one object; sizes of 0 take the type's defaults. */
 void buildShape(const ObjectSpec& spec, Object& obj) {
   const std::string& t = spec.type;
-  auto size = [&](double l, double w, double h) {
-    return Eigen::Vector3d(spec.size.x() > 0 ? spec.size.x() : l,
-                           spec.size.y() > 0 ? spec.size.y() : w,
-                           spec.size.z() > 0 ? spec.size.z() : h);
-  };
   auto& P = obj.prims;
   auto wheels = [&](double L, double W, double x_front, double x_rear, double d,
                     std::uint16_t cls) {
@@ -261,20 +256,20 @@ void buildShape(const ObjectSpec& spec, Object& obj) {
   };
   if (t == "car") {
     // Body, narrower glass cabin set back, wheels: a silhouette that changes with the view.
-    const Eigen::Vector3d s = size(4.4, 1.8, 1.5);
+    const Eigen::Vector3d s = bodySize(spec);
     const double L = s.x(), W = s.y(), H = s.z(), belt = 0.62 * H;
     P.push_back(box(0, 0, (0.3 + belt) / 2, L, W, belt - 0.3, sem::kCar, 0.55f));
     P.push_back(box(-0.1 * L, 0, (belt + H) / 2, 0.5 * L, 0.88 * W, H - belt, sem::kCar, 0.15f));
     wheels(L, W, 0.32 * L, -0.32 * L, std::min(0.65, 0.45 * H), sem::kCar);
   } else if (t == "van") {
-    const Eigen::Vector3d s = size(5.0, 2.0, 2.2);
+    const Eigen::Vector3d s = bodySize(spec);
     const double L = s.x(), W = s.y(), H = s.z();
     P.push_back(box(-0.1 * L, 0, (0.35 + H) / 2, 0.8 * L, W, H - 0.35, sem::kCar, 0.5f));
     P.push_back(
         box(0.4 * L, 0, (0.35 + 0.5 * H) / 2, 0.2 * L, 0.95 * W, 0.5 * H - 0.35, sem::kCar, 0.5f));
     wheels(L, W, 0.33 * L, -0.33 * L, 0.7, sem::kCar);
   } else if (t == "truck") {
-    const Eigen::Vector3d s = size(8.0, 2.5, 3.4);
+    const Eigen::Vector3d s = bodySize(spec);
     const double L = s.x(), W = s.y(), H = s.z();
     P.push_back(
         box(0.39 * L, 0, (0.5 + 0.85 * H) / 2, 0.22 * L, W, 0.85 * H - 0.5, sem::kTruck, 0.5f));
@@ -283,7 +278,7 @@ void buildShape(const ObjectSpec& spec, Object& obj) {
     wheels(L, W, 0.36 * L, -0.36 * L, 0.95, sem::kTruck);
     wheels(L, W, -0.22 * L, -0.22 * L, 0.95, sem::kTruck);
   } else if (t == "person") {
-    const Eigen::Vector3d s = size(0.6, 0.6, 1.75);
+    const Eigen::Vector3d s = bodySize(spec);
     const double H = s.z(), w = s.y() / 0.6;
     const double hip = 0.47 * H;
     for (int side : {-1, 1}) {
@@ -295,7 +290,7 @@ void buildShape(const ObjectSpec& spec, Object& obj) {
     P.push_back(ellipsoid(0, 0, H - 0.065 * H, 0.1 * w, 0.09 * w, 0.065 * H, sem::kPerson, 0.3f));
     obj.stride = 0.2 * std::min(1.0, s.x() / 0.6);
   } else if (t == "cyclist") {
-    const Eigen::Vector3d s = size(1.8, 0.6, 1.75);
+    const Eigen::Vector3d s = bodySize(spec);
     const double L = s.x(), H = s.z();
     const std::uint16_t c = sem::kBicyclist;
     P.push_back(box(0.3 * L, 0, 0.34, 0.37 * L, 0.06, 0.68, c, 0.3f));   // front wheel

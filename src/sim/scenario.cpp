@@ -95,6 +95,19 @@ const std::vector<std::string>& objectTypes() {
   return types;
 }
 
+Eigen::Vector3d bodySize(const ObjectSpec& spec) {
+  Eigen::Vector3d size = spec.size;
+  Eigen::Vector3d fallback = Eigen::Vector3d::Zero();
+  if (spec.type == "car") fallback = {4.4, 1.8, 1.5};
+  if (spec.type == "van") fallback = {5.0, 2.0, 2.2};
+  if (spec.type == "truck") fallback = {8.0, 2.5, 3.4};
+  if (spec.type == "person") fallback = {0.6, 0.6, 1.75};
+  if (spec.type == "cyclist") fallback = {1.8, 0.6, 1.75};
+  for (int k = 0; k < 3; ++k)
+    if (!(size[k] > 0)) size[k] = fallback[k];
+  return size;
+}
+
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;

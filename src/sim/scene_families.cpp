@@ -210,16 +210,8 @@ class SceneBuilder {
       scenario_.blind_frames.push_back(f);
   }
 
-  /** Length and width [m] of a mover's box as the simulator builds it (its size or the type's
-   * default, lidar_simulator.cpp). */
-  static Eigen::Vector2d footprint(const ObjectSpec& o) {
-    if (o.size.x() > 0 && o.size.y() > 0) return o.size.head<2>();
-    if (o.type == "truck") return {8.0, 2.5};
-    if (o.type == "van") return {5.0, 2.0};
-    if (o.type == "person") return {0.6, 0.6};
-    if (o.type == "cyclist") return {1.8, 0.6};
-    return {4.4, 1.8};  // car
-  }
+  /** Length and width [m] of a mover's box as the simulator builds it. */
+  static Eigen::Vector2d footprint(const ObjectSpec& o) { return bodySize(o).head<2>(); }
 
   /** True when the mover's footprint overlaps an added mover's at a frame time. */
   bool runsIntoAnother(const ObjectSpec& o, const Trajectory& path) const {

@@ -141,5 +141,10 @@ Scenario parseScenario(const std::string& text, const std::string& file_name);
 /** \brief Object types a scenario may use. */
 const std::vector<std::string>& objectTypes();
 
+/** \brief Length, width and height [m] of a car, van, truck, person or cyclist: each of the
+ * spec's sizes where it gives one, else its type's default (the body LidarSimulator builds).
+ * Other types: the spec's size as given. */
+Eigen::Vector3d bodySize(const ObjectSpec& spec);
+
 }  // namespace sim
 }  // namespace pcl_movers
