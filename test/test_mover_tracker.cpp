@@ -490,6 +490,31 @@ TEST(MoverTracker, StaticTrackThatStartsMovingIsFollowed) {
   }
 }
 
+// A still track is judged against where it was last measured, not against the last still frame:
+// a car creeping out of its slot at 0.8 m/s moves 0.08 m a frame, under static_shift (0.15 m),
+// and was measured only every static_refresh_frames frames while its velocity stayed under the
+// still limit. Now it is measured once it has moved static_shift, so its velocity follows.
+TEST(MoverTracker, CreepingStillTrackIsMeasuredAsItMoves) {
+  Tracker tracker;
+  tracker.setParameters(defaults());
+  const Eigen::Vector3d sensor(0, 0, 1.7);
+  int registrations_creeping = 0;
+  double speed_at_1s = 0;
+  for (int k = 0; k < 31; ++k) {
+    const double t = 0.1 * k;
+    const double crept = k < 20 ? 0.0 : 0.8 * (t - 2.0);
+    SceneBuilder scene;
+    scene.addBox(sensor, Eigen::Vector2d(15 + crept, 0), 0.0, 4.0, 1.8, 1.5);
+    const auto results = step(tracker, scene, sensor, t);
+    ASSERT_EQ(results.size(), 1u);
+    if (k > 20 && k <= 26) registrations_creeping += tracker.getRegistrationCount();
+    if (k == 30) speed_at_1s = results[0].velocity.norm();
+  }
+  // 0.08 m a frame: measured every second frame at least (the old rule: every fourth).
+  EXPECT_GE(registrations_creeping, 3);
+  EXPECT_NEAR(speed_at_1s, 0.8, 0.3);
+}
+
 // static_clearance: a person standing between two posts 1.5 m away (parked cars in a row,
 // bushes) used to be registered every frame, since any cluster within 2 m counted as ambiguous.
 // With the posts beyond static_clearance (1 m) the still tracks are registered only every

@@ -71,11 +71,11 @@ namespace pcl_movers {
  * of the object is seen, which is the point of registering instead of using centroids.
  *
  * Cost control (documented design choice, `track.static_refresh_frames`): an established, slow,
- * non-mover track whose single gated candidate's centroid moved less than `track.static_shift` is
- * registered only every `track.static_refresh_frames` frames; in between it is marked seen without
- * a Kalman update (its velocity is near zero anyway). Any centroid jump, ambiguity or speed-up
- * brings registration back at once. `track.static_refresh_frames` = 1 registers every track every
- * frame, as in the paper.
+ * non-mover track whose single gated candidate's centroid lies within `track.static_shift` of its
+ * last update's is registered only every `track.static_refresh_frames` frames; in between it is
+ * marked seen without a Kalman update (its velocity is near zero anyway). Any centroid jump,
+ * ambiguity or speed-up brings registration back at once. `track.static_refresh_frames` = 1
+ * registers every track every frame, as in the paper.
  *
  * Practical limits (documented design choices): clusters longer than `decision.max_length` or
  * taller than `decision.max_height` (buildings, walls, hedges, tree rows) are tracked by centroid

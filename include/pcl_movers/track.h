@@ -133,7 +133,10 @@ struct Track {
   Eigen::Vector2d reportedVelocity() const {
     return velocity_filter.isInitialized() ? velocity_filter.velocity() : filter.velocity();
   }
-  SurfaceDensity::Ptr model;   ///< accumulated surface density (registration mode)
+  SurfaceDensity::Ptr model;  ///< accumulated surface density (registration mode)
+  /// Centroid of the cluster of the last update (still frames excluded): a still frame needs
+  /// the cluster within track.static_shift of it (findStillClusters()).
+  Eigen::Vector3d measured_centroid = Eigen::Vector3d::Zero();
   int since_registration = 0;  ///< cheap (unregistered) frames since the last registration
   bool confirmed = false;      ///< latched mover (see decision.latch)
   int mover_run = 0;      ///< consecutive updates decided mover (latched after decision.window)

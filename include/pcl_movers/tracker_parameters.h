@@ -135,13 +135,14 @@ struct TrackParameters {
   /// frames only; 1 = every frame (the paper's).
   int static_refresh_frames = 4;
 
-  /// Largest centroid shift [m] of such a candidate that counts as "still".
+  /// Largest centroid shift [m] of such a candidate from the track's last update (not its last
+  /// still frame, so that slow motion adds up) that counts as "still".
   double static_shift = 0.15;
 
   /// Such a track's nearest cluster is only taken unregistered when every other cluster's
-  /// centroid is farther than this from the track's last centroid [m] (2 = two gate margins, the
-  /// earlier rule: one cluster within 2 m). Closer neighbours (parked cars in a row, bushes) are
-  /// no ambiguity for a cluster that stayed within static_shift and kept its size.
+  /// centroid is farther than this from the track's last update's centroid [m] (2 = two gate
+  /// margins, the earlier rule: one cluster within 2 m). Closer neighbours (parked cars in a row,
+  /// bushes) are no ambiguity for a cluster that stayed within static_shift and kept its size.
   double static_clearance = 1.0;
 
   /// Velocity σ of a newborn track [m/s] (its velocity is unknown).
@@ -247,7 +248,8 @@ struct TrackParameters {
     f("manoeuvre_sigmas", manoeuvre_sigmas, "manoeuvre: acceleration significance [sigma]");
     f("static_refresh_frames", static_refresh_frames,
       "register still static tracks every N frames");
-    f("static_shift", static_shift, "max centroid shift of a still static track [m]");
+    f("static_shift", static_shift,
+      "max centroid shift of a still static track since its last update [m]");
     f("static_clearance", static_clearance,
       "other clusters this close make a still static track register [m]");
     f("initial_velocity_sigma", initial_velocity_sigma, "velocity sigma of a new track [m/s]");

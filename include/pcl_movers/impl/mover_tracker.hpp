@@ -514,7 +514,7 @@ std::vector<int> MoverTracker<PointT>::findStillClusters(
     const Frame& frame, const std::vector<Candidate>& candidates) const {
   const auto& p = parameters_;
   // Cheap frames for established static tracks (see static_refresh_frames): the track's nearest
-  // usable cluster has a centroid that moved as little as the (near zero) prediction says, and no
+  // usable cluster's centroid lies within static_shift of the last measured one, and no
   // other cluster is within static_clearance. cheap[ti] is that cluster (-1: register as usual).
   std::vector<int> cheap(tracks_.size(), -1);
   if (!frame.use_registration || p.track.static_refresh_frames <= 1) return cheap;
@@ -529,7 +529,11 @@ std::vector<int> MoverTracker<PointT>::findStillClusters(
     for (std::size_t c = 0; c < candidates.size(); ++c) {
       const auto& cand = candidates[c];
       if (!cand.usable) continue;
-      const double d = (cand.features.centroid - track.features.centroid).template head<2>().norm();
+      // From where the track was last measured, not from the last still frame's cluster: an
+      // object creeping off (a car leaving its slot, 0.1 m a frame) stays within static_shift of
+      // the frame before and was measured only every static_refresh_frames frames, its velocity
+      // lagging its motion (tune split: parking hit 65.1 -> 65.8 %, vel. RMS 0.508 -> 0.494).
+      const double d = (cand.features.centroid - track.measured_centroid).template head<2>().norm();
       if (d < nearest) {
         second = nearest;
         nearest = d;
@@ -784,6 +788,7 @@ void MoverTracker<PointT>::updateTrack(const Match& m, const Frame& frame,
   auto& r = results_[m.cluster];
   const bool registered = m.registered;
   t.since_registration = 0;
+  t.measured_centroid = cand.features.centroid;
   if (registered) motion_.turn(t, std::atan2(m.transform(1, 0), m.transform(0, 0)));
   const double range = (cand.features.centroid - frame.sensor_origin).template head<2>().norm();
   const double meas_sigma = motion_.measure(t, m.measurement, registered, cand.features.occluded,
