@@ -756,8 +756,9 @@ TEST(FreeSpaceMap, WalkerApproachingFortyMetresAwayIsTestedAtTheLongLagOnceItsVo
   // A walker coming straight at the (parked) ego from 40 m at 1.3 m/s, a wall behind it. Over
   // free_space.lag = 5 frames it moves 0.65 m, under the 0.8 m margin at that range: the short
   // lag sees its own earlier front. Its speed votes pass and its positions lie on a line, so it
-  // is tested at the long lag as well (free_space.lag_margins) instead of waiting for the 1.5 s
-  // line of sustained motion (frame 8 against 13 today). Standing still, it is never a mover.
+  // is tested at the long lag as well (free_space.lag_margins); without that it is never
+  // confirmed (sustained motion, whose evidence is at the long lag, takes lines only up to
+  // decision.speed, 1.2 m/s). Standing still, it is never a mover.
   const auto firstMoverFrame = [](double speed, double lag_margins) {
     auto scene = [speed](int f, Eigen::Vector2d& ego) {
       ego = Eigen::Vector2d(0, 0);
@@ -773,6 +774,6 @@ TEST(FreeSpaceMap, WalkerApproachingFortyMetresAwayIsTestedAtTheLongLagOnceItsVo
   const int short_lag_only = firstMoverFrame(1.3, 0.0);
   EXPECT_GE(with_long_lag, 0);
   EXPECT_LE(with_long_lag, 10);
-  EXPECT_GT(short_lag_only, with_long_lag);
+  EXPECT_TRUE(short_lag_only < 0 || short_lag_only > with_long_lag) << short_lag_only;
   EXPECT_EQ(firstMoverFrame(0.0, 2.0), -1);
 }

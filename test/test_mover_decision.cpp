@@ -178,6 +178,34 @@ TEST(MoverDecision, ASlowWalkerOnAStraightLineIsASustainedMover) {
   EXPECT_EQ(parked.reason, MoverReason::kNoMotion);
 }
 
+TEST(MoverDecision, ASlowLineNeedsNoFullWindowOnlyItsSignificance) {
+  // 1 m/s for 0.7 s (8 positions), below decision.speed: under half of decision.slow_window, and
+  // enough for the F-test at the 0.1 m position σ floor; a walker need not wait 1.1 s.
+  const auto decision = decisionWithoutFreeSpace();
+  Track walker = movingTrack(1.0, 8);
+  walker.fast.assign(5, 0);
+  decision.decide(walker, {}, {});
+  EXPECT_TRUE(walker.mover);
+  EXPECT_EQ(walker.reason, MoverReason::kSustained);
+  // The same walker over 0.5 s: 6 positions cannot tell 0.5 m from the σ floor's scatter.
+  Track short_line = movingTrack(1.0, 6);
+  short_line.fast.assign(5, 0);
+  decision.decide(short_line, {}, {});
+  EXPECT_FALSE(short_line.mover);
+  EXPECT_EQ(short_line.reason, MoverReason::kNoMotion);
+}
+
+TEST(MoverDecision, ALineFasterThanTheSpeedThresholdIsNotSustainedMotion) {
+  // A stretch of wall registered sliding along with the sensor at 17 m/s, on a straight line,
+  // with no speed vote: the speed votes judge fast lines, the slow path does not take them.
+  const auto decision = decisionWithoutFreeSpace();
+  Track wall = movingTrack(17.0, 16);
+  wall.fast.assign(5, 0);
+  decision.decide(wall, {}, {});
+  EXPECT_FALSE(wall.mover);
+  EXPECT_EQ(wall.reason, MoverReason::kNoMotion);
+}
+
 TEST(MoverDecision, AConfirmedMoverLatchesAfterAFullWindowOfPositiveDecisions) {
   const auto decision = decisionWithoutFreeSpace();
   const int window = decision.getParameters().decision.window;

@@ -9,6 +9,7 @@
 #include <pcl_movers/track.h>
 
 #include <Eigen/Core>
+#include <limits>
 #include <vector>
 
 namespace pcl_movers {
@@ -57,8 +58,9 @@ class MoverDecision {
   /** \brief The median roughness (ClusterFeatures::roughness) of the track's last
    * decision.window views; porous above free_space.porous_roughness. */
   static double medianRoughness(const Track& track);
-  /** \brief The track's positions over the last slow_window seconds lie on a line faster than
-   * slow_speed, beyond their scatter (F-test at confirm_false_rate). */
+  /** \brief The track's positions over the last slow_window seconds (five at least) lie on a
+   * line faster than slow_speed and at most decision.speed, beyond their scatter (F-test at
+   * confirm_false_rate). */
   bool sustainedMotion(const Track& track) const;
   /** \brief Speed votes (decision.votes of the last decision.window updates faster than
    * decision.speed; all of a full window for a view seen only above what hides it) and a net
@@ -95,10 +97,11 @@ class MoverDecision {
 
  private:
   /** \brief The least-squares line through `positions` (σ from their scatter, at least
-   * `min_sigma`) is faster than `min_speed` and rejects "velocity = 0" in the F-test at
-   * decision.confirm_false_rate. */
+   * `min_sigma`) is faster than `min_speed`, at most `max_speed`, and rejects "velocity = 0" in
+   * the F-test at decision.confirm_false_rate. */
   bool significantLine(const std::vector<Eigen::Vector3d>& positions, double min_sigma,
-                       double min_speed) const;
+                       double min_speed,
+                       double max_speed = std::numeric_limits<double>::infinity()) const;
   /** \brief `points` tested against the scan free_space.lag frames back, or the oldest stored
    * one when fewer are stored (empty Evidence when there is none: the first frame). */
   FreeSpaceMap::Evidence shortLagEvidence(const std::vector<Eigen::Vector3f>& points) const;

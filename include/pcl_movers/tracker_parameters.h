@@ -295,11 +295,12 @@ struct DecisionParameters {
   /// window updates, it has at least min_age updates, and the displacement of its
   /// measurements over the window is consistent with that speed.
   /// Sustained slow motion (0 = off): a track whose positions over the last slow_window seconds
-  /// lie on a line faster than slow_speed, significantly so (the F-test of confirm_false_rate, σ
-  /// from the scatter about the line, at least track.registration_sigma), counts as moving even
-  /// below speed. A walker at 0.6 m/s covers 0.9 m in 1.5 s, while registration wobble of a parked
-  /// car does not lie on a line; the free-space (slowFreeSpaceEvidence()) and height tests still
-  /// apply. Tune split: 1.0 s 0.040 FA/frame, 1.5 s 66.6 % hit 0.033, 2.0 s 66.2 % 0.032.
+  /// (five at least) lie on a line faster than slow_speed and at most speed, significantly so
+  /// (the F-test of confirm_false_rate, σ from the scatter about the line, at least
+  /// track.registration_sigma), counts as moving although it gets no speed votes. A walker
+  /// at 0.6 m/s covers 0.9 m in 1.5 s, while registration wobble of a parked car does not lie on
+  /// a line; the free-space (slowFreeSpaceEvidence()) and height tests still apply. Tune split:
+  /// 1.0 s 0.040 FA/frame, 1.5 s 66.6 % hit 0.033, 2.0 s 66.2 % 0.032.
   double slow_window = 1.5;
   double slow_speed = 0.4;
   int window = 5;
