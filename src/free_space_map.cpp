@@ -283,16 +283,23 @@ void FreeSpaceMap::poolScan(Scan& s) {
         out[c] = std::min(out[c], v > 0.0f ? v : silent);
       }
   }
-  // Pass 2: per row, the min over its window's beam rows.
+  // Pass 2: per row, the min over its window's beam rows. A row whose window holds no beam is
+  // never read (sightAt() knows it unknown from its WindowRows) and is left as it is: over half
+  // the rows of a 64-beam sensor's image, and this pass is bound by the memory it writes.
   s.pooled.resize(rows * cols);
   for (std::size_t r = 0; r < rows; ++r) {
-    float* out = s.pooled.data() + r * cols;
-    std::fill(out, out + cols, kNone);
     const WindowRows& window = window_rows_[r];
+    if (!window.beam) continue;
+    float* out = s.pooled.data() + r * cols;
+    bool first = true;
     for (int k = window.lo; k <= window.hi; ++k) {
       if (!beam_rows_[static_cast<std::size_t>(k)]) continue;
       const float* in = row_minima_.data() + static_cast<std::size_t>(k) * cols;
-      for (std::size_t c = 0; c < cols; ++c) out[c] = std::min(out[c], in[c]);
+      if (first)
+        std::copy(in, in + cols, out);
+      else
+        for (std::size_t c = 0; c < cols; ++c) out[c] = std::min(out[c], in[c]);
+      first = false;
     }
   }
   const auto per_row = static_cast<std::size_t>(poolBlocksPerRow());
@@ -380,6 +387,7 @@ FreeSpaceMap::Sight FreeSpaceMap::sightAt(const Scan& s, float z, float d, int r
   if (read == WindowRead::kPooled && row >= 0 && row < rows_ &&
       static_cast<std::size_t>(rows_) == row_version_.size()) {
     beam = window_rows_[static_cast<std::size_t>(row)].beam;
+    if (!beam) return Sight::kUnknown;  // nothing returned around there, no beam cast (below)
     const float v = windowCell(s, row, col);
     lost = v < 0.0f;
     nearest = v < std::numeric_limits<float>::infinity() && !lost ? v : 0.0f;
