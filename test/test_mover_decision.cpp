@@ -38,6 +38,13 @@ Track movingTrack(double speed, int n) {
   return t;
 }
 
+/// movingTrack() with no speed vote in its window.
+Track unvotedTrack(double speed, int n) {
+  Track t = movingTrack(speed, n);
+  t.fast.assign(5, 0);
+  return t;
+}
+
 /// A 3 m/s track with every speed vote of its window, its last view a poor match (B 0.5), so the
 /// vote rule decides, not the early confirmation of well-measured motion.
 Track votedFastTrack() {
@@ -121,8 +128,7 @@ TEST(MoverDecision, TestsRunInOrderAndTheFirstFailedIsTheReason) {
     EXPECT_EQ(t.reason, MoverReason::kLow);
   }
   {  // no motion: no speed votes and no sustained line
-    Track t = movingTrack(0.0, 6);
-    t.fast.assign(5, 0);
+    Track t = unvotedTrack(0.0, 6);
     decision.decide(t, points, none);
     EXPECT_FALSE(t.mover);
     EXPECT_EQ(t.reason, MoverReason::kNoMotion);
@@ -162,14 +168,12 @@ TEST(MoverDecision, AWellMeasuredYoungTrackIsConfirmedBeforeTheMinimumAge) {
 TEST(MoverDecision, ASlowWalkerOnAStraightLineIsASustainedMover) {
   // 0.6 m/s for 1.5 s (16 registered positions), below decision.speed: no speed votes.
   const auto decision = decisionWithoutFreeSpace();
-  Track walker = movingTrack(0.6, 16);
-  walker.fast.assign(5, 0);
+  Track walker = unvotedTrack(0.6, 16);
   decision.decide(walker, {}, {});
   EXPECT_TRUE(walker.mover);
   EXPECT_EQ(walker.reason, MoverReason::kSustained);
   // A parked car's registration wobble, as large but on no line, is not.
-  Track parked = movingTrack(0.0, 16);
-  parked.fast.assign(5, 0);
+  Track parked = unvotedTrack(0.0, 16);
   for (std::size_t k = 0; k < parked.long_history.size(); ++k)
     parked.long_history[k].head<2>() =
         Eigen::Vector2d(0.3 * std::sin(1.7 * k), 0.3 * std::cos(2.3 * k));
@@ -182,14 +186,12 @@ TEST(MoverDecision, ASlowLineNeedsNoFullWindowOnlyItsSignificance) {
   // 1 m/s for 0.7 s (8 positions), below decision.speed: under half of decision.slow_window, and
   // enough for the F-test at the 0.1 m position σ floor; a walker need not wait 1.1 s.
   const auto decision = decisionWithoutFreeSpace();
-  Track walker = movingTrack(1.0, 8);
-  walker.fast.assign(5, 0);
+  Track walker = unvotedTrack(1.0, 8);
   decision.decide(walker, {}, {});
   EXPECT_TRUE(walker.mover);
   EXPECT_EQ(walker.reason, MoverReason::kSustained);
   // The same walker over 0.5 s: 6 positions cannot tell 0.5 m from the σ floor's scatter.
-  Track short_line = movingTrack(1.0, 6);
-  short_line.fast.assign(5, 0);
+  Track short_line = unvotedTrack(1.0, 6);
   decision.decide(short_line, {}, {});
   EXPECT_FALSE(short_line.mover);
   EXPECT_EQ(short_line.reason, MoverReason::kNoMotion);
@@ -199,8 +201,7 @@ TEST(MoverDecision, ALineFasterThanTheSpeedThresholdIsNotSustainedMotion) {
   // A stretch of wall registered sliding along with the sensor at 17 m/s, on a straight line,
   // with no speed vote: the speed votes judge fast lines, the slow path does not take them.
   const auto decision = decisionWithoutFreeSpace();
-  Track wall = movingTrack(17.0, 16);
-  wall.fast.assign(5, 0);
+  Track wall = unvotedTrack(17.0, 16);
   decision.decide(wall, {}, {});
   EXPECT_FALSE(wall.mover);
   EXPECT_EQ(wall.reason, MoverReason::kNoMotion);
