@@ -22,6 +22,7 @@ rules=(
   "occlusion-aware|--track.occluded_fraction 0|occluded views skipped by the velocity filter"
   "merged clusters split|--track.split_merged 0|a cluster claimed by two moving tracks split"
   "re-acquisition|--track.reacquire_velocity 0|a track born at a lost mover inherits its velocity"
+  "swept edges|--track.swept_edges 0|a growing or shrinking view's position from its confirmed edge"
   "confirmed movers hold|--track.hold_confirmed 0|a low-B cluster kept by its confirmed mover"
   "coasting|--track.max_missed_frames 0|tracks kept through missed frames"
   "speed significance|--decision.speed_sigmas 0|a fast vote must be significant"

@@ -11,6 +11,7 @@
 #include <pcl_movers/mover_decision.h>
 #include <pcl_movers/observation.h>
 #include <pcl_movers/surface_density.h>
+#include <pcl_movers/swept_edges.h>
 #include <pcl_movers/track.h>
 #include <pcl_movers/track_motion.h>
 
@@ -308,6 +309,12 @@ class MoverTracker {
   void seeStill(Track& track, const Candidate& candidate, ClusterResult& result);
   /** \brief Updates the track of match `m` with its cluster: filters, history, model, decision. */
   void updateTrack(const Match& m, const Frame& frame, std::vector<Candidate>& candidates);
+  /** \brief Replaces the displacement along a growing or shrinking view's length by the move
+   * of the edge the free space confirms (sweptEdgeShift(), `track.swept_edges`): registered
+   * matches of tracks updated by registration in the previous frame. Returns whether it did. */
+  bool measureSweptEdge(const Track& t, const std::vector<Eigen::Vector3f>& view, Match& m);
+  /** \brief The world points of cluster `cluster`, all of them (not the registration sample). */
+  std::vector<Eigen::Vector3f> fullView(const Frame& frame, int cluster) const;
   /** \brief Accumulates a registered view into the track's model, or starts the model of a track
    * born too low once it is seen tall enough. */
   void updateModel(Track& track, const Match& m, const Frame& frame,

@@ -149,6 +149,9 @@ struct Track {
   /// World points of the last update's view (at most kLastViewPoints), for
   /// splitMergedClusters().
   std::vector<Eigen::Vector3f> last_view;
+  /// Every world point of the last update's view (track.swept_edges): the extents of a view
+  /// must be measured on the whole cluster, a sample's extremes wander.
+  std::vector<Eigen::Vector3f> full_view;
   /// last_view of the last free_space.long_lag updates, oldest first: the receding test of
   /// sustained slow motion (slowFreeSpaceEvidence()).
   Fifo<std::vector<Eigen::Vector3f>> past_views;

@@ -780,10 +780,54 @@ void MoverTracker<PointT>::seeStill(Track& t, const Candidate& cand, ClusterResu
 }
 
 template <typename PointT>
-void MoverTracker<PointT>::updateTrack(const Match& m, const Frame& frame,
+std::vector<Eigen::Vector3f> MoverTracker<PointT>::fullView(const Frame& frame, int cluster) const {
+  const auto& indices = frame.observations[cluster].indices.indices;
+  std::vector<Eigen::Vector3f> view;
+  view.reserve(indices.size());
+  for (const auto k : indices) {
+    const auto& q = frame.cloud[k];
+    if (std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z))
+      view.emplace_back(q.x, q.y, q.z);
+  }
+  return view;
+}
+
+template <typename PointT>
+bool MoverTracker<PointT>::measureSweptEdge(const Track& t,
+                                            const std::vector<Eigen::Vector3f>& view, Match& m) {
+  const FreeSpaceMap* map = getFreeSpaceMap();
+  // The previous view and position must be the previous frame's: the swept strips are judged
+  // against the scan one frame back.
+  if (!parameters_.track.swept_edges || !map || !m.registered || t.missed != 0 ||
+      t.since_registration != 0 || t.full_view.empty() || view.empty() || t.history.empty())
+    return false;
+  const SweptEdges edges = sweptEdgeShift(t.full_view, view, *map, parameters_.track.swept);
+  if (!edges.measured) return false;
+  // Only the displacement along the view's length is replaced: across it the registration
+  // is not ambiguous.
+  const Eigen::Vector2d registered =
+      m.measurement.template head<2>() - t.history.back().template head<2>();
+  const Eigen::Vector2d correction = (edges.shift - edges.axis.dot(registered)) * edges.axis;
+  m.measurement.template head<2>() += correction;
+  // The cluster → model motion follows: a cluster point lies `correction` further on.
+  Eigen::Matrix4f back = Eigen::Matrix4f::Identity();
+  back.template block<2, 1>(0, 3) = -correction.template cast<float>();
+  m.transform = m.transform * back;
+  return true;
+}
+
+template <typename PointT>
+void MoverTracker<PointT>::updateTrack(const Match& match, const Frame& frame,
                                        std::vector<Candidate>& candidates) {
   const auto& p = parameters_;
-  Track& t = tracks_[m.track];
+  Track& t = tracks_[match.track];
+  Match m = match;
+  // The extents must be those of the whole view: the extremes of a sample wander by tenths of
+  // a metre from frame to frame.
+  std::vector<Eigen::Vector3f> view;
+  if (p.track.swept_edges && getFreeSpaceMap() && !t.large) view = fullView(frame, m.cluster);
+  // A view whose moving edge was measured is no longer ambiguous where it is bounded.
+  const bool occluded = !measureSweptEdge(t, view, m) && candidates[m.cluster].features.occluded;
   const Candidate& cand = candidates[m.cluster];
   auto& r = results_[m.cluster];
   const bool registered = m.registered;
@@ -791,8 +835,8 @@ void MoverTracker<PointT>::updateTrack(const Match& m, const Frame& frame,
   t.measured_centroid = cand.features.centroid;
   if (registered) motion_.turn(t, std::atan2(m.transform(1, 0), m.transform(0, 0)));
   const double range = (cand.features.centroid - frame.sensor_origin).template head<2>().norm();
-  const double meas_sigma = motion_.measure(t, m.measurement, registered, cand.features.occluded,
-                                            m.similarity, range, frame.time);
+  const double meas_sigma =
+      motion_.measure(t, m.measurement, registered, occluded, m.similarity, range, frame.time);
   t.z = m.measurement.z();
   t.last_time = frame.time;
   ++t.hits;
@@ -821,10 +865,11 @@ void MoverTracker<PointT>::updateTrack(const Match& m, const Frame& frame,
   while (!t.long_history.empty() &&
          t.long_history.front().z() < frame.time - p.decision.slow_window - 1e-6)
     t.long_history.pop_front();
-  motion_.refit(t, m.measurement, registered, cand.features.occluded, meas_sigma, frame.time);
+  motion_.refit(t, m.measurement, registered, occluded, meas_sigma, frame.time);
   decision_.voteFast(t, registered);
   updateModel(t, m, frame, candidates, meas_sigma);
   decideAndRemember(t, m, frame, candidates);
+  t.full_view = std::move(view);
   report(t, t.similarity, r);
 }
 
