@@ -55,10 +55,11 @@ struct SweptEdgesParameters {
 };
 
 /** \brief Compares `view` (world points of this frame) with `previous_view` (world points of the
- * same object in the previous frame; it may be subsampled) along the long axis of `view`, and
+ * same object in the previous frame) along the long axis of `view`, and
  * judges each edge's swept strip against `map`: the strip an edge advanced into against the scan
  * one frame back, the strip it retreated from against the latest scan. `map` must hold the
- * current scan as its latest. */
+ * current scan as its latest. Both views should hold every point of their clusters: the
+ * extremes of a subsample wander by tenths of a metre, as much as min_change. */
 SweptEdges sweptEdgeShift(const std::vector<Eigen::Vector3f>& previous_view,
                           const std::vector<Eigen::Vector3f>& view, const FreeSpaceMap& map,
                           const SweptEdgesParameters& parameters = SweptEdgesParameters());
