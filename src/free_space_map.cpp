@@ -89,6 +89,22 @@ void FreeSpaceMap::fillDropouts(Scan& s) const {
   }
 }
 
+void FreeSpaceMap::coverColumns(Scan& s) const {
+  // Walks the columns once from a covered one, so that a gap across the azimuth seam is measured
+  // whole; a scan without any return covers nothing.
+  const auto it = std::find(s.covered_cols.begin(), s.covered_cols.end(), 1);
+  if (it == s.covered_cols.end()) return;
+  const int start = static_cast<int>(it - s.covered_cols.begin());
+  const int max_gap = static_cast<int>(std::floor(kMaxCoverageGapDeg / az_res_deg_));
+  int last = start;  // the last column with a return, unwrapped
+  for (int k = start + 1; k <= start + cols_; ++k) {
+    if (!s.covered_cols[static_cast<std::size_t>(wrapCol(k))]) continue;
+    if (k - last - 1 <= max_gap)
+      for (int g = last + 1; g < k; ++g) s.covered_cols[static_cast<std::size_t>(wrapCol(g))] = 1;
+    last = k;
+  }
+}
+
 void FreeSpaceMap::addBlindScan() {
   if (scans_.size() >= static_cast<std::size_t>(history_)) scans_.pop_back();
   scans_.emplace_front();
@@ -403,8 +419,12 @@ FreeSpaceMap::Sight FreeSpaceMap::sightAt(const Scan& s, float z, float d, int r
     // cast there (see setNoReturnRange()). Not within the sensor's minimum range of that scan
     // either: a return closer than the shortest one reported would not have been reported (a van
     // beside the path, closer than a 3 m minimum range, was silent and "seen through").
+    // Nor outside the sensor's horizontal field of view, where no ray was cast at all (a
+    // forward ladar: the part of a passing truck beside it was "seen through").
     if (!(z < 0.0f && beam && passesOverGround(z / d) && d > s.min_range + margin &&
-          no_return_range_ > 0))
+          no_return_range_ > 0 && col >= 0 && col < cols_ &&
+          s.covered_cols.size() == static_cast<std::size_t>(cols_) &&
+          s.covered_cols[static_cast<std::size_t>(col)]))
       return Sight::kUnknown;
     // Seen empty up to the no-return range only: nothing is known beyond it.
     return no_return_range_ > d + margin ? Sight::kThrough : Sight::kBefore;

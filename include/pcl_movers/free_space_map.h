@@ -148,6 +148,9 @@ class FreeSpaceMap {
     std::vector<float> range;  ///< 0 = no return; empty for a blind frame (addBlindScan())
     /// 1 for the rows (elevations) in which some return was stored.
     std::vector<std::uint8_t> sampled_rows;
+    /// 1 for the columns (azimuths) the sensor covered: those with a return, and gaps between
+    /// them of up to kMaxCoverageGapDeg (see coverColumns()).
+    std::vector<std::uint8_t> covered_cols;
     /// Shortest range returned [m]: nothing closer is reported by the sensor (its minimum range),
     /// so a silent ray says nothing about the space up to there.
     float min_range = 0.0f;
@@ -166,6 +169,10 @@ class FreeSpaceMap {
   /** \brief Fills each silent cell of `s.range` whose two azimuth neighbours returned at
    * about the same range (a dropout) with the nearer of their ranges. */
   void fillDropouts(Scan& s) const;
+  /** \brief Marks as covered the silent columns of `s` between two columns with returns at most
+   * kMaxCoverageGapDeg apart: azimuths between a sensor's samples, or a sky-facing gap, not
+   * outside its horizontal field of view. */
+  void coverColumns(Scan& s) const;
   /** \brief Sets every cell of `s.range` to 0 (no return) for a new scan: only the rows that
    * the scan whose memory it reuses wrote, when the layout is the same (a sensor's beams cover
    * a fraction of the rows; the others are still clear). */
@@ -240,6 +247,9 @@ class FreeSpaceMap {
    * "seen through" (VLP-16, 2° between beams: a parked van passed at 2 m was a mover). */
   void windowRows(int row, int& lo, int& hi) const;
   static constexpr int kMaxBeamGapRows = 25;
+  /// Widest silent azimuth gap still inside a sensor's field of view [deg]: a few times the
+  /// coarsest column step of the supported sensors (a forward ladar's 0.5°).
+  static constexpr float kMaxCoverageGapDeg = 2.0f;
   /** \brief The row and column of a direction: the definition that locate() computes in its
    * vectorized loop (and the tests compare it with). */
   int cellRow(float elevation_deg) const {
@@ -318,6 +328,7 @@ void FreeSpaceMap::addScan(const pcl::PointCloud<PointT>& scan, const Eigen::Iso
   clearRange(s);
   s.pooled_version.assign(static_cast<std::size_t>(rows_) * poolBlocksPerRow(), 0);  // none yet
   s.sampled_rows.assign(static_cast<std::size_t>(rows_), 0);
+  s.covered_cols.assign(static_cast<std::size_t>(cols_), 0);
   s.min_range = std::numeric_limits<float>::max();
   // In blocks: the coordinates copied out of the point structs, the cells computed by a loop
   // that vectorizes (computeCells()), then the nearest range kept per cell.
@@ -339,10 +350,12 @@ void FreeSpaceMap::addScan(const pcl::PointCloud<PointT>& scan, const Eigen::Iso
       float& cell = s.range[static_cast<std::size_t>(cells[i])];
       if (cell == 0.0f || ranges[i] < cell) cell = ranges[i];
       s.sampled_rows[static_cast<std::size_t>(cells[i] / cols_)] = 1;
+      s.covered_cols[static_cast<std::size_t>(cells[i] % cols_)] = 1;
       s.min_range = std::min(s.min_range, ranges[i]);
     }
   }
   fillDropouts(s);
+  coverColumns(s);
   scans_.push_front(std::move(s));
   indexBeamRows();
   if (pool_on_add_) poolScan(scans_.front());
