@@ -247,8 +247,9 @@ class FreeSpaceMap {
    * "seen through" (VLP-16, 2° between beams: a parked van passed at 2 m was a mover). */
   void windowRows(int row, int& lo, int& hi) const;
   static constexpr int kMaxBeamGapRows = 25;
-  /// Widest silent azimuth gap still inside a sensor's field of view [deg]: a few times the
-  /// coarsest column step of the supported sensors (a forward ladar's 0.5°).
+  /// Widest silent azimuth gap still inside a sensor's field of view [deg]: several times the
+  /// coarsest column step of the supported sensors (the forward ladar's 0.25°, against the map's
+  /// 0.2° columns).
   static constexpr float kMaxCoverageGapDeg = 2.0f;
   /** \brief The row and column of a direction: the definition that locate() computes in its
    * vectorized loop (and the tests compare it with). */
