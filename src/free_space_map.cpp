@@ -454,7 +454,6 @@ FreeSpaceMap::Evidence FreeSpaceMap::test(const std::vector<Eigen::Vector3f>& wo
       if (sights[i] == Sight::kUnknown) continue;
       ++e.tested;
       if (sights[i] == Sight::kThrough) ++e.seen_through;
-      if (sights[i] == Sight::kAt) ++e.occupied;
     }
   }
   return e;

@@ -99,7 +99,6 @@ void MoverDecision::decide(Track& track, const std::vector<Eigen::Vector3f>& poi
     free_now = !porous && ((fast_now && freeSpaceEvidence(track, points)) ||
                            ((slow_now || (fast_now && shortLagTooShort(track))) &&
                             slowFreeSpaceEvidence(track, points)));
-    countRefutation(track);
     track.free_votes.push_back(free_now ? 1 : 0);
     while (static_cast<int>(track.free_votes.size()) > p.decision.window)
       track.free_votes.pop_front();
@@ -220,38 +219,6 @@ bool MoverDecision::sustainedMotion(const Track& track) const {
   // window to fill (tune split: a quarter of the missed walker frames, `no_motion`).
   return significantLine(track.long_history, p.track.registration_sigma, p.decision.slow_speed,
                          p.decision.speed);
-}
-
-void MoverDecision::countRefutation(Track& track) const {
-  const auto& p = parameters_;
-  if (!free_space_map_ || track.past_views.empty() || track.history.size() < 2) return;
-  const Eigen::Vector3f sensor = free_space_map_->sensorPosition(0);
-  if (!sensor.allFinite()) return;
-  // The oldest stored view, past_views.size() updates back, has moved on by the track's line
-  // over that time. Only a displacement of lag_margins range margins can show: a slower line is
-  // not tested (a walker group's earlier view at 33 m is within the margin of where it is now).
-  const LineFit fit = fitVelocity(track.history, p.track.registration_sigma);
-  if (!fit.valid) return;
-  const double frame_period = (track.history.back().z() - track.history.front().z()) /
-                              static_cast<double>(track.history.size() - 1);
-  const double elapsed = frame_period * static_cast<double>(track.past_views.size());
-  const double range = (track.filter.position() - sensor.head<2>().cast<double>()).norm();
-  if (fit.velocity.norm() * elapsed < p.free_space.lag_margins * free_space_map_->margin(range))
-    return;
-  // Its points within one range margin of its base are left out: the ground under them returns
-  // at their distance whether the object left or not (tune split with them: vel. RMS 0.418 ->
-  // 0.450).
-  const auto& view = track.past_views.front();
-  float base = std::numeric_limits<float>::max();
-  for (const auto& q : view) base = std::min(base, q.z());
-  const float above = base + static_cast<float>(free_space_map_->getMargin());
-  std::vector<Eigen::Vector3f> upper;
-  for (const auto& q : view)
-    if (q.z() > above) upper.push_back(q);
-  const FreeSpaceMap::Evidence e = free_space_map_->test(upper, 0);
-  if (e.tested < p.free_space.min_points) return;
-  // Most of it still returns where it was: the object did not leave, its line slid.
-  track.refutations = 2 * e.occupied >= e.tested ? track.refutations + 1 : 0;
 }
 
 bool MoverDecision::freeSpaceEvidence(Track& track,

@@ -343,29 +343,3 @@ TEST(MoverDecision, ASpeedVoteWithMostOfItsViewSeenThroughIsAMoverAtOnce) {
   EXPECT_FALSE(half.mover);
   EXPECT_EQ(half.reason, MoverReason::kNoFreeSpace);
 }
-
-TEST(MoverDecision, AnEarlierViewStillReturnedWhereItWasRefutesTheTracksMotion) {
-  // The seen-through wall above. A track whose line says 3 m/s, so its view of five updates back
-  // should now be 1.5 m behind it: when that view lies on the wall, which every scan still
-  // returns, the motion is refuted at each test (a parked car whose registration slid); when it
-  // lies 10 m ahead, in space the scans saw through, it is not. A 0.1 m/s line has not moved a
-  // range margin, so it is not tested.
-  const SeenThroughWall scene;
-  const DetectorParameters& params = scene.params;
-  std::vector<Eigen::Vector3f> on_wall;
-  for (int i = -4; i <= 4; ++i)
-    for (int k = -4; k <= 4; ++k) on_wall.emplace_back(20.0f, 0.05f * i, 0.1f * k);
-  const auto refutations = [&](double speed, const std::vector<Eigen::Vector3f>& earlier) {
-    Track t = movingTrack(speed, 6);
-    t.fast.assign(5, 1);
-    t.similarity = 0.5;
-    for (int update = 0; update < params.decision.votes; ++update) {
-      t.past_views.assign(5, earlier);
-      scene.decision.decide(t, scene.points, {});
-    }
-    return t.refutations;
-  };
-  EXPECT_EQ(refutations(3.0, on_wall), params.decision.votes);
-  EXPECT_EQ(refutations(3.0, scene.points), 0);
-  EXPECT_EQ(refutations(0.1, on_wall), 0);
-}

@@ -114,7 +114,6 @@ class FreeSpaceMap {
   struct Evidence {
     int tested = 0;        ///< points whose direction had at least one return in the window
     int seen_through = 0;  ///< of those, points lying in space the scan saw empty
-    int occupied = 0;      ///< of those, points at the scan's return (Sight::kAt)
     double fraction() const { return tested > 0 ? static_cast<double>(seen_through) / tested : 0; }
   };
 

@@ -68,12 +68,6 @@ class MoverDecision {
    * waived for wellMeasuredMotion(). */
   bool fastMotion(const Track& track, bool seen_standing_only, bool well_measured) const;
 
-  /** \brief Counts in track.refutations whether the current scan refutes the track's motion: the
-   * track's oldest stored view (Track::past_views) lies, by its line, at least
-   * free_space.lag_margins range margins from where the track is now, yet most of that view's
-   * points (above its base) are still returned at their distance. Reset by a test that does not
-   * refute; a test the motion is too short for, or too few judged points, leaves it. */
-  void countRefutation(Track& track) const;
   /** \brief Free-space evidence of a track: the larger fraction of (a) its current points seen
    * through by the scan `free_space.lag` frames ago and (b) its oldest stored points seen through
    * by the current scan (that view is then dropped, so every vote tests a different view). Sets

@@ -142,9 +142,6 @@ struct Track {
   int mover_run = 0;      ///< consecutive updates decided mover (latched after decision.window)
   double free_space = 0;  ///< free-space evidence of the last test (fraction seen through)
   Fifo<char> free_votes;  ///< free-space test passed, for each of the last tests
-  /// Consecutive tests by which the current scan refuted the track's motion: its earlier view
-  /// still occupied (MoverDecision::countRefutation()).
-  int refutations = 0;
   /// ClusterFeatures::roughness of the last decision.window updates' views.
   Fifo<float> roughness;
   /// World points of the last updates (subsampled), oldest first, for the free-space test.

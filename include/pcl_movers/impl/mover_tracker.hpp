@@ -308,14 +308,9 @@ bool MoverTracker<PointT>::claimantsDiffer(const Claimant& a, const Claimant& b)
   if (!a.fit.valid || !b.fit.valid) return false;
   if (!tracks_[a.track].confirmed && !tracks_[b.track].confirmed) return false;
   // The other one a confirmed mover too, or static: an unconfirmed moving track next to a
-  // mover is usually a fragment of it (KITTI van) whose velocity has drifted. Static includes a
-  // track whose motion the free space refuted decision.votes times in a row: a parked car whose
-  // line slid while a passing van hid part of it (tune split, parking: without this the van's
-  // track stayed latched onto the car, 7 false alarms in one scene).
+  // mover is usually a fragment of it (KITTI van) whose velocity has drifted.
   const auto settled = [&](const Claimant& c) {
-    const Track& t = tracks_[c.track];
-    return t.confirmed || c.fit.velocity.norm() < 0.5 * p.decision.speed ||
-           t.refutations >= p.decision.votes;
+    return tracks_[c.track].confirmed || c.fit.velocity.norm() < 0.5 * p.decision.speed;
   };
   if (!settled(a) || !settled(b)) return false;
   const double dv = (a.fit.velocity - b.fit.velocity).norm();
@@ -850,7 +845,6 @@ void MoverTracker<PointT>::updateTrack(const Match& match, const Frame& frame,
   if (t.missed > 0) {
     t.past_points.clear();
     t.past_views.clear();
-    t.refutations = 0;
   }
   t.missed = 0;
   t.held_from.setConstant(std::numeric_limits<double>::quiet_NaN());
@@ -1029,7 +1023,6 @@ void MoverTracker<PointT>::reanchorTrack(Track& t, const Frame& frame,
   t.missed = 0;
   t.past_points.clear();
   t.past_views.clear();
-  t.refutations = 0;
   t.held_from.setConstant(std::numeric_limits<double>::quiet_NaN());
 }
 
