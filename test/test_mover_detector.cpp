@@ -6,7 +6,6 @@
 #include <pcl_movers/io/ground_truth.h>
 #include <pcl_movers/io/sequence.h>
 #include <pcl_movers/mover_detector.h>
-#include <pcl_movers/mover_fragments.h>
 #include <pcl_movers/range_image_region_growing.h>
 #include <pcl_movers/sim/lidar_simulator.h>
 #include <pcl_movers/sim/scenario.h>
@@ -422,36 +421,6 @@ TEST(DetectorParameters, StageClassesStartFromTheDetectorDefaults) {
   EXPECT_EQ(filter.getParameters().local_slope, other.local_slope);
 }
 
-namespace {
-
-// A mover row that is a part of a larger mover's (findMoverFragments(), with the rows' own
-// velocities) reports that mover's velocity. Returns how many rows were such parts.
-int checkMoverPartsReportTheirMoversVelocity(const Detector::FrameResult& result) {
-  const pcl_movers::SegmentationParameters segment;
-  std::vector<bool> mover;
-  std::vector<double> yaw;  // the rows' boxes, sensor frame like the organized cloud
-  std::vector<Eigen::Vector2d> velocity;
-  for (const auto& row : result.rows) {
-    mover.push_back(row.mover);
-    yaw.push_back(row.yaw);
-    velocity.emplace_back(row.vx, row.vy);
-  }
-  const auto owner = pcl_movers::findMoverFragments(
-      *result.organized, result.cluster_indices, mover, yaw, segment.max_gap,
-      static_cast<float>(segment.fragment_margin), /*wrap_around=*/true, velocity);
-  int parts = 0;
-  for (std::size_t k = 0; k < owner.size(); ++k) {
-    if (!mover[k] || owner[k] < 0) continue;
-    ++parts;
-    const auto& by = result.rows[static_cast<std::size_t>(owner[k])];
-    EXPECT_EQ(result.rows[k].vx, by.vx) << "frame " << result.frame;
-    EXPECT_EQ(result.rows[k].vy, by.vy) << "frame " << result.frame;
-  }
-  return parts;
-}
-
-}  // namespace
-
 // The simulator's sample scene (ego at 5 m/s, an oncoming car, a braking van, a crossing person,
 // a parked car, a standing person, trees, a pole): movers found, statics never movers, labels and
 // rows consistent.
@@ -464,7 +433,7 @@ TEST(MoverDetector, SimulatedSampleScene) {
   Detector detector;
   detector.setParameters(pcl_movers::DetectorParameters());
   Score score;
-  int mover_points = 0, ground_points = 0, mover_parts = 0;
+  int mover_points = 0, ground_points = 0;
   for (int i = 0; i < simulator.getFrameCount(); ++i) {
     pcl::PointCloud<PointT>::Ptr scan(new pcl::PointCloud<PointT>);
     std::vector<std::uint32_t> labels;
@@ -492,7 +461,6 @@ TEST(MoverDetector, SimulatedSampleScene) {
           }));
         }
     }
-    mover_parts += checkMoverPartsReportTheirMoversVelocity(result);
     for (const auto l : result.labels) {
       mover_points += l == Detector::kMover;
       ground_points += l == Detector::kGround;
@@ -501,8 +469,6 @@ TEST(MoverDetector, SimulatedSampleScene) {
   }
   EXPECT_GT(ground_points, 100000);
   EXPECT_GT(mover_points, 1000);
-  // The oncoming car, passing close by, is tracked twice for two frames (a part split off it).
-  EXPECT_GT(mover_parts, 0);
   int visible = 0, hits = 0;
   for (const auto& v : score.visible) {
     visible += v.second;

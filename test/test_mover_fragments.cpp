@@ -45,12 +45,11 @@ struct Scene {
     clusters.push_back(cluster);
     return clusters.size() - 1;
   }
-  std::vector<int> fragments(const std::vector<bool>& mover, float margin = 0.5f,
-                             const std::vector<Eigen::Vector2d>& velocity = {}) const {
+  std::vector<int> fragments(const std::vector<bool>& mover, float margin = 0.5f) const {
     // Boxes along the columns' direction (y, across the line of sight) would do as well; x is
     // the mover's heading here.
     return findMoverFragments(cloud, clusters, mover, std::vector<double>(clusters.size(), 0.0),
-                              /*max_gap=*/2, margin, wrap_around, velocity);
+                              /*max_gap=*/2, margin, wrap_around);
   }
 };
 
@@ -118,43 +117,4 @@ TEST(MoverFragments, TheColumnSeamOfAFullTurnJoinsAsInRegionGrowing) {
   EXPECT_EQ(s.fragments({true, false})[part], 0);
   s.wrap_around = false;  // a sensor with a narrower field of view: the edges are apart
   EXPECT_EQ(s.fragments({true, false})[part], -1);
-}
-
-TEST(MoverFragments, ASmallerMoverMovingWithALargerOneIsItsPart) {
-  // A car's body and its front split off at a range step, each tracked: the front's young track
-  // slides (6 m/s of the car's 9, a few degrees off).
-  Scene s;
-  const auto body = s.add(4, 9, 20, 39, 10.0f);
-  const auto front = s.add(10, 11, 22, 37, 10.4f);
-  const std::vector<Eigen::Vector2d> v{{9.0, 0.0}, {6.0, 0.5}};
-  const auto owner = s.fragments({true, true}, 0.5f, v);
-  EXPECT_EQ(owner[front], static_cast<int>(body));
-  EXPECT_EQ(owner[body], -1);  // the larger one is the owner, never the part
-  // Without velocities, movers are never parts.
-  EXPECT_EQ(s.fragments({true, true}), std::vector<int>({-1, -1}));
-}
-
-TEST(MoverFragments, AMoverMovingOtherwiseIsNotAPart) {
-  // Two walkers crossing each other's paths at equal speed: the smaller one fits the larger's
-  // grown box and touches it, but heads 90° away.
-  Scene s;
-  s.add(4, 12, 30, 33, 10.0f);
-  const auto other = s.add(4, 12, 34, 35, 10.2f);
-  EXPECT_EQ(s.fragments({true, true}, 0.5f, {{1.4, 0.0}, {0.0, 1.4}})[other], -1);
-  EXPECT_EQ(s.fragments({true, true}, 0.5f, {{1.4, 0.0}, {1.3, 0.2}})[other], 0);
-  // Or walking the other way.
-  EXPECT_EQ(s.fragments({true, true}, 0.5f, {{1.4, 0.0}, {-1.0, 0.0}})[other], -1);
-}
-
-TEST(MoverFragments, APartOfAPartBelongsToTheLargestMover) {
-  // Body, a mover part of it (its front), and a static part of that front (a wheel): both go to
-  // the body, so that a fragment's owner is never a fragment.
-  Scene s;
-  const auto body = s.add(4, 9, 20, 39, 10.0f);
-  const auto front = s.add(10, 11, 22, 37, 10.4f);
-  const auto wheel = s.add(12, 12, 24, 30, 10.6f);
-  const std::vector<Eigen::Vector2d> v{{9.0, 0.0}, {8.0, 0.0}, {0.0, 0.0}};
-  const auto owner = s.fragments({true, true, false}, 0.5f, v);
-  EXPECT_EQ(owner[front], static_cast<int>(body));
-  EXPECT_EQ(owner[wheel], static_cast<int>(body));
 }

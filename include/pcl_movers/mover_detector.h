@@ -74,8 +74,7 @@ class MoverDetector {
   struct FrameResult {
     int frame = 0;
     double time = 0;
-    /** One row per cluster with a track (tracks.csv rows of this frame); a mover that is a part
-     * of a larger mover (findMoverFragments()) reports that mover's velocity. */
+    /** One row per cluster with a track (tracks.csv rows of this frame). */
     std::vector<io::TrackRow> rows;
     /** Points of rows[i] in `organized`. */
     std::vector<pcl::PointIndices> cluster_indices;
@@ -226,9 +225,8 @@ class MoverDetector {
   void writeOutputs(const PointCloud& organized, const pcl::Indices& objects,
                     const std::vector<pcl::PointIndices>& clusters, const Eigen::Isometry3d& pose,
                     FrameResult& result) const;
-  /** \brief Labels the points of each mover's fragments (findMoverFragments()) with the mover;
-   * a fragment that is a mover of its own keeps its points and row, but the row reports the
-   * mover's velocity. */
+  /** \brief Labels the points of each mover's fragments (findMoverFragments()) with the mover:
+   * labels only, the fragments' rows stay as tracked. */
   void labelMoverFragments(const PointCloud& organized,
                            const std::vector<pcl::PointIndices>& clusters, double pose_yaw,
                            FrameResult& result) const;

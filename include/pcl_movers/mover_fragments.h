@@ -27,15 +27,6 @@ namespace pcl_movers {
  * car); one small enough to fit is taken, at the cost of a few points. A fragment of two
  * movers goes to the later one in cluster order.
  *
- * Given the movers' velocities, a mover's cluster is itself a fragment of a mover with more
- * points when it passes the same test and moves with it: their velocities nearer each other than
- * the faster one is to rest, |v_f - v_m| < max(|v_f|, |v_m|) (for equal speeds, headings within
- * 60°). That is a second track born on a part of a large mover passing close by (a car's front
- * split off its side, moving with it but slower while its registration slides), which the tracker
- * cannot tell from an object of its own; two walkers crossing each other's path are not parts.
- * Owners are resolved to the end of such a chain (each step has more points, so it ends): a
- * fragment's owner is never a fragment.
- *
  * \param organized the cloud the clusters index (row-major, width × height)
  * \param clusters its clusters
  * \param mover per cluster: whether it is a mover's
@@ -43,15 +34,12 @@ namespace pcl_movers {
  * \param max_gap empty cells region growing bridges (SegmentationParameters::max_gap)
  * \param margin how far [m] a fragment may reach beyond its mover's box
  * \param wrap_around whether the first and last columns are neighbours (a 360° sensor), as in
- * region growing (RangeImageRegionGrowing::setWrapAround)
- * \param velocity per cluster: its velocity in x/y [m/s], any frame (only movers' are read);
- * empty: a mover is never a fragment */
+ * region growing (RangeImageRegionGrowing::setWrapAround) */
 template <typename PointT>
 std::vector<int> findMoverFragments(const pcl::PointCloud<PointT>& organized,
                                     const std::vector<pcl::PointIndices>& clusters,
                                     const std::vector<bool>& mover, const std::vector<double>& yaw,
-                                    int max_gap, float margin, bool wrap_around = true,
-                                    const std::vector<Eigen::Vector2d>& velocity = {}) {
+                                    int max_gap, float margin, bool wrap_around = true) {
   std::vector<int> owner(clusters.size(), -1);
   const int width = static_cast<int>(organized.width), height = static_cast<int>(organized.height);
   if (height < 2 || width < 2 || std::none_of(mover.begin(), mover.end(), [](bool m) { return m; }))
@@ -64,14 +52,6 @@ std::vector<int> findMoverFragments(const pcl::PointCloud<PointT>& organized,
   std::vector<int> touching;
   for (std::size_t m = 0; m < clusters.size(); ++m) {
     if (!mover[m]) continue;
-    // What may be a part of mover m: any other object, and smaller movers moving with it.
-    const auto isPart = [&](int f) {
-      if (!mover[f]) return true;
-      if (velocity.empty() || clusters[f].indices.size() >= clusters[m].indices.size())
-        return false;
-      const double dv = (velocity[f] - velocity[m]).norm();
-      return dv < std::max(velocity[f].norm(), velocity[m].norm());
-    };
     touching.clear();
     for (const auto i : clusters[m].indices) {
       const int row = i / width, col = i % width;
@@ -83,7 +63,7 @@ std::vector<int> findMoverFragments(const pcl::PointCloud<PointT>& organized,
             c += c < 0 ? width : -width;
           }
           const int f = cluster_of[static_cast<std::size_t>(r) * width + c];
-          if (f >= 0 && isPart(f) &&
+          if (f >= 0 && !mover[f] &&
               std::find(touching.begin(), touching.end(), f) == touching.end())
             touching.push_back(f);
         }
@@ -114,9 +94,6 @@ std::vector<int> findMoverFragments(const pcl::PointCloud<PointT>& organized,
         owner[f] = static_cast<int>(m);
     }
   }
-  for (auto& o : owner)
-    while (o >= 0 && owner[static_cast<std::size_t>(o)] >= 0)
-      o = owner[static_cast<std::size_t>(o)];
   return owner;
 }
 

@@ -445,36 +445,19 @@ void MoverDetector<PointT>::labelMoverFragments(const PointCloud& organized,
   const auto& cluster_results = tracker_.getClusterResults();
   std::vector<bool> mover(clusters.size(), false);
   std::vector<double> yaw(clusters.size(), 0.0);
-  std::vector<Eigen::Vector2d> velocity(clusters.size());
   for (std::size_t c = 0; c < clusters.size(); ++c) {
-    velocity[c] = cluster_results[c].velocity;  // world: differences only, any frame will do
     mover[c] = cluster_results[c].track_id >= 0 && cluster_results[c].mover;
     yaw[c] = cluster_results[c].features.yaw - pose_yaw;  // world heading -> sensor frame
   }
   const std::vector<int> owner =
       findMoverFragments(organized, clusters, mover, yaw, parameters_.segment.max_gap,
                          static_cast<float>(parameters_.segment.fragment_margin),
-                         segmenter_.object && segmenter_.object->getWrapAround(), velocity);
-  std::vector<int> row_of(clusters.size(), -1);  // as writeOutputs() added them
-  for (std::size_t c = 0, r = 0; c < clusters.size(); ++c)
-    if (cluster_results[c].track_id >= 0) row_of[c] = static_cast<int>(r++);
+                         segmenter_.object && segmenter_.object->getWrapAround());
   for (std::size_t f = 0; f < clusters.size(); ++f) {
     if (owner[f] < 0) continue;
-    const auto m = static_cast<std::size_t>(owner[f]);
-    if (mover[f]) {
-      // A mover's part with a track of its own moves as the mover does: its row reports the
-      // mover's velocity, the better estimate (on more points; the part's, often young, slides).
-      // Its points keep their own track, as its row does.
-      auto& row = result.rows[static_cast<std::size_t>(row_of[f])];
-      const auto& by = result.rows[static_cast<std::size_t>(row_of[m])];
-      row.vx = by.vx;
-      row.vy = by.vy;
-      row.speed = by.speed;
-      continue;
-    }
     for (const auto i : clusters[f].indices) {
       result.labels[i] = kMover;
-      result.track_ids[i] = cluster_results[m].track_id;
+      result.track_ids[i] = cluster_results[static_cast<std::size_t>(owner[f])].track_id;
     }
   }
 }
