@@ -45,11 +45,12 @@ struct Scene {
     clusters.push_back(cluster);
     return clusters.size() - 1;
   }
-  std::vector<int> fragments(const std::vector<bool>& mover, float margin = 0.5f) const {
+  std::vector<int> fragments(const std::vector<bool>& mover, float margin = 0.5f,
+                             const std::vector<int>& born_part_of = {}) const {
     // Boxes along the columns' direction (y, across the line of sight) would do as well; x is
     // the mover's heading here.
     return findMoverFragments(cloud, clusters, mover, std::vector<double>(clusters.size(), 0.0),
-                              /*max_gap=*/2, margin, wrap_around);
+                              /*max_gap=*/2, margin, wrap_around, born_part_of);
   }
 };
 
@@ -117,4 +118,40 @@ TEST(MoverFragments, TheColumnSeamOfAFullTurnJoinsAsInRegionGrowing) {
   EXPECT_EQ(s.fragments({true, false})[part], 0);
   s.wrap_around = false;  // a sensor with a narrower field of view: the edges are apart
   EXPECT_EQ(s.fragments({true, false})[part], -1);
+}
+
+TEST(MoverFragments, AMoverBornAsALargerMoversPartIsItsPart) {
+  // A car's body and its front split off at a range step, each tracked as a mover.
+  Scene s;
+  const auto body = s.add(4, 9, 20, 39, 10.0f);
+  const auto front = s.add(10, 11, 22, 37, 10.4f);
+  const std::vector<bool> movers{true, true};
+  // The front's track was born as the body's fragment: it is a part.
+  auto owner = s.fragments(movers, 0.5f, {-1, static_cast<int>(body)});
+  EXPECT_EQ(owner[front], static_cast<int>(body));
+  EXPECT_EQ(owner[body], -1);
+  // Born on its own (a walker met later beside the car): never a part, however close.
+  EXPECT_EQ(s.fragments(movers, 0.5f, {-1, -1}), std::vector<int>({-1, -1}));
+  EXPECT_EQ(s.fragments(movers), std::vector<int>({-1, -1}));
+}
+
+TEST(MoverFragments, AMoverBornAPartIsNoneWhenItNoLongerFits) {
+  // The part's track, born on the body, has drifted off the body's grown box (its own object
+  // after all): the geometric test still applies.
+  Scene s;
+  const auto body = s.add(4, 9, 20, 39, 10.0f);
+  const auto far = s.add(10, 11, 22, 37, 13.0f);
+  EXPECT_EQ(s.fragments({true, true}, 0.5f, {-1, static_cast<int>(body)})[far], -1);
+}
+
+TEST(MoverFragments, APartOfAPartBelongsToTheLargestMover) {
+  // Body, a mover part of it (its front), and a static part of that front (a wheel): both go to
+  // the body, so that a fragment's owner is never a fragment.
+  Scene s;
+  const auto body = s.add(4, 9, 20, 39, 10.0f);
+  const auto front = s.add(10, 11, 22, 37, 10.4f);
+  const auto wheel = s.add(12, 12, 24, 30, 10.6f);
+  const auto owner = s.fragments({true, true, false}, 0.5f, {-1, static_cast<int>(body), -1});
+  EXPECT_EQ(owner[front], static_cast<int>(body));
+  EXPECT_EQ(owner[wheel], static_cast<int>(body));
 }

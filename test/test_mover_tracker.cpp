@@ -1364,3 +1364,36 @@ TEST(MoverTracker, WalkerHiddenFromBelowNeedsEveryVoteOfAWindow) {
   }
   EXPECT_GE(first, 0);
 }
+
+// A track remembers the mover it was born a part of (recordBirthOwners()); a track born on its
+// own that later stands beside a mover is not a part of it, and a birth owner is never changed.
+TEST(MoverTracker, BirthOwnersAreRecordedForTracksBornInTheUpdateOnly) {
+  Tracker tracker;
+  tracker.setParameters(defaults());
+  const Eigen::Vector3d sensor(0, 0, 1.7);
+  const auto frame = [&](double t, bool with_part) {
+    SceneBuilder scene;
+    scene.addBox(sensor, Eigen::Vector2d(10 + 9 * t, 0), 0.0, 4.5, 1.8, 1.5);  // a car
+    scene.addBox(sensor, Eigen::Vector2d(20, 10), 0.0, 0.5, 0.5, 1.7);         // a walker
+    if (with_part) scene.addBox(sensor, Eigen::Vector2d(12.5 + 9 * t, 0), 0.0, 0.5, 1.8, 1.0);
+    return step(tracker, scene, sensor, t);
+  };
+  auto r = frame(0.0, false);
+  const int car = r[0].track_id, walker = r[1].track_id;
+  ASSERT_GE(car, 0);
+  ASSERT_GE(walker, 0);
+  tracker.recordBirthOwners({-1, -1});
+  EXPECT_EQ(tracker.findTrack(walker)->born_part_of, -1);
+  r = frame(0.1, true);  // the car's front split off: born its part
+  const int part = r[2].track_id;
+  ASSERT_GE(part, 0);
+  ASSERT_NE(part, car);
+  tracker.recordBirthOwners({-1, 0, 0});  // the walker, met later, is said to be a part too
+  EXPECT_EQ(tracker.findTrack(part)->born_part_of, car);
+  EXPECT_EQ(tracker.findTrack(walker)->born_part_of, -1);  // born on its own
+  r = frame(0.2, true);
+  ASSERT_EQ(r[2].track_id, part);
+  tracker.recordBirthOwners({-1, -1, 1});  // nor does a later frame change a birth owner
+  EXPECT_EQ(tracker.findTrack(part)->born_part_of, car);
+  EXPECT_EQ(tracker.findTrack(car)->born_part_of, -1);
+}

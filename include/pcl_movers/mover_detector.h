@@ -16,6 +16,7 @@
 #include <pcl/point_types.h>
 
 #include <Eigen/Geometry>
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -74,7 +75,9 @@ class MoverDetector {
   struct FrameResult {
     int frame = 0;
     double time = 0;
-    /** One row per cluster with a track (tracks.csv rows of this frame). */
+    /** One row per cluster with a track (tracks.csv rows of this frame); a mover that is a part
+     * of a larger mover (its track born as the larger one's fragment) reports that mover's
+     * velocity. */
     std::vector<io::TrackRow> rows;
     /** Points of rows[i] in `organized`. */
     std::vector<pcl::PointIndices> cluster_indices;
@@ -221,15 +224,24 @@ class MoverDetector {
   void splitMergedClusters(const PointCloud& world, double time,
                            std::vector<pcl::PointIndices>& clusters,
                            std::vector<Observation>& observations);
-  /** \brief The frame's labels, track ids and rows from the tracker's cluster results. */
+  /** \brief Per cluster, the mover cluster it is a fragment of (findMoverFragments()), or -1; a
+   * mover's cluster is one when its track was born as that mover's fragment. Records the owners
+   * of the tracks born this frame (MoverTracker::recordBirthOwners()). */
+  std::vector<int> assignFragments(const PointCloud& organized,
+                                   const std::vector<pcl::PointIndices>& clusters, double pose_yaw);
+  /** \brief The frame's labels, track ids and rows from the tracker's cluster results; `owner`
+   * is assignFragments()'. */
   void writeOutputs(const PointCloud& organized, const pcl::Indices& objects,
-                    const std::vector<pcl::PointIndices>& clusters, const Eigen::Isometry3d& pose,
-                    FrameResult& result) const;
-  /** \brief Labels the points of each mover's fragments (findMoverFragments()) with the mover:
-   * labels only, the fragments' rows stay as tracked. */
-  void labelMoverFragments(const PointCloud& organized,
-                           const std::vector<pcl::PointIndices>& clusters, double pose_yaw,
-                           FrameResult& result) const;
+                    const std::vector<pcl::PointIndices>& clusters, const std::vector<int>& owner,
+                    const Eigen::Isometry3d& pose, FrameResult& result) const;
+  /** \brief Labels the points of each mover's fragments with the mover; a fragment that is a
+   * mover of its own keeps its points and row, but the row reports the mover's velocity. */
+  void labelMoverFragments(const std::vector<pcl::PointIndices>& clusters,
+                           const std::vector<int>& owner, FrameResult& result) const;
+  /** \brief The sensor's yaw in the world [rad]. */
+  static double poseYaw(const Eigen::Isometry3d& pose) {
+    return std::atan2(pose.linear()(1, 0), pose.linear()(0, 0));
+  }
   /** \brief The tracks.csv row of one tracked cluster; `world_to_sensor` and `pose_yaw` (the
    * sensor's yaw in the world) are the frame's, computed once for all its rows. */
   io::TrackRow trackRow(const typename MoverTracker<PointT>::ClusterResult& cluster,

@@ -27,6 +27,14 @@ namespace pcl_movers {
  * car); one small enough to fit is taken, at the cost of a few points. A fragment of two
  * movers goes to the later one in cluster order.
  *
+ * A mover's cluster with fewer points than the mover `born_part_of` names is a fragment of it too,
+ * by the same test: a second track born on a part of a large mover passing close by (a car's
+ * front split off its side, moving with it but slower while its young registration slides),
+ * which the tracker cannot tell from an object of its own. Only the birth tells them apart: a
+ * walker beside a car moving its way is as close and moves as much with it, but its track was
+ * born on its own. Owners are resolved to the end of such a chain (a track is born a part of an
+ * older track, so it ends): a fragment's owner is never a fragment.
+ *
  * \param organized the cloud the clusters index (row-major, width × height)
  * \param clusters its clusters
  * \param mover per cluster: whether it is a mover's
@@ -34,12 +42,15 @@ namespace pcl_movers {
  * \param max_gap empty cells region growing bridges (SegmentationParameters::max_gap)
  * \param margin how far [m] a fragment may reach beyond its mover's box
  * \param wrap_around whether the first and last columns are neighbours (a 360° sensor), as in
- * region growing (RangeImageRegionGrowing::setWrapAround) */
+ * region growing (RangeImageRegionGrowing::setWrapAround)
+ * \param born_part_of per cluster: the mover cluster whose fragment its track was born as, or -1
+ * (only movers' are read); empty: a mover is never a fragment */
 template <typename PointT>
 std::vector<int> findMoverFragments(const pcl::PointCloud<PointT>& organized,
                                     const std::vector<pcl::PointIndices>& clusters,
                                     const std::vector<bool>& mover, const std::vector<double>& yaw,
-                                    int max_gap, float margin, bool wrap_around = true) {
+                                    int max_gap, float margin, bool wrap_around = true,
+                                    const std::vector<int>& born_part_of = {}) {
   std::vector<int> owner(clusters.size(), -1);
   const int width = static_cast<int>(organized.width), height = static_cast<int>(organized.height);
   if (height < 2 || width < 2 || std::none_of(mover.begin(), mover.end(), [](bool m) { return m; }))
@@ -52,6 +63,14 @@ std::vector<int> findMoverFragments(const pcl::PointCloud<PointT>& organized,
   std::vector<int> touching;
   for (std::size_t m = 0; m < clusters.size(); ++m) {
     if (!mover[m]) continue;
+    const auto mayBePart = [&](int f) {
+      if (!mover[f]) return true;
+      // The part holds less of the object than its owner: once it holds more, its own track is
+      // the better estimate (the owner has shrunk to a remnant).
+      return !born_part_of.empty() &&
+             born_part_of[static_cast<std::size_t>(f)] == static_cast<int>(m) &&
+             clusters[f].indices.size() < clusters[m].indices.size();
+    };
     touching.clear();
     for (const auto i : clusters[m].indices) {
       const int row = i / width, col = i % width;
@@ -63,7 +82,7 @@ std::vector<int> findMoverFragments(const pcl::PointCloud<PointT>& organized,
             c += c < 0 ? width : -width;
           }
           const int f = cluster_of[static_cast<std::size_t>(r) * width + c];
-          if (f >= 0 && !mover[f] &&
+          if (f >= 0 && mayBePart(f) &&
               std::find(touching.begin(), touching.end(), f) == touching.end())
             touching.push_back(f);
         }
@@ -94,6 +113,10 @@ std::vector<int> findMoverFragments(const pcl::PointCloud<PointT>& organized,
         owner[f] = static_cast<int>(m);
     }
   }
+  for (auto& o : owner)  // bounded, should a caller's born_part_of hold a cycle
+    for (std::size_t step = 0;
+         o >= 0 && owner[static_cast<std::size_t>(o)] >= 0 && step < clusters.size(); ++step)
+      o = owner[static_cast<std::size_t>(o)];
   return owner;
 }
 

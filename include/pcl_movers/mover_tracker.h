@@ -184,6 +184,11 @@ class MoverTracker {
   const std::vector<Track>& getTracks() const { return tracks_; }
   /** \brief The track with this id, or nullptr. */
   const Track* findTrack(int id) const;
+  /** \brief Records what each track born in the last update() was born on: `owner[c]` is the
+   * cluster (of that update, in input order) that cluster c is a fragment of, or -1
+   * (findMoverFragments()); the track of cluster c gets the owner's track id as
+   * Track::born_part_of. Tracks born earlier keep theirs. */
+  void recordBirthOwners(const std::vector<int>& owner);
   /** \brief Number of registrations run in the last update() (for profiling). */
   int getRegistrationCount() const { return registrations_; }
   /** \brief Total number of tracks ever started. */

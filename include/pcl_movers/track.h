@@ -117,6 +117,9 @@ struct Track {
   /// Longest (not large) view of the object so far [m]: how far from the last visible part
   /// another part of it can reappear (see reacquire_velocity).
   double max_length = 0;
+  /// Id of the mover whose fragment (findMoverFragments()) the track's first cluster was, or -1:
+  /// the track follows a part of that mover (MoverTracker::recordBirthOwners()).
+  int born_part_of = -1;
   Fifo<char> fast;                ///< speed > decision.speed after each of the last updates
   Fifo<Eigen::Vector3d> history;  ///< (x, y, time) of the last measurements
   /// (x, y, time) of the measurements of the last slow_window seconds (sustainedMotion()).

@@ -322,7 +322,8 @@ void MoverDetector<PointT>::process(const PointCloudConstPtr& scan,
   tracker_.update(world, observations, pose.translation(), time);
   const auto t5 = Clock::now();
 
-  writeOutputs(*organized, *objects, clusters, pose, result);
+  const std::vector<int> owner = assignFragments(*organized, clusters, poseYaw(pose));
+  writeOutputs(*organized, *objects, clusters, owner, pose, result);
   const double split_ms = ms(split_start, split_end);
   timings_ = {{"organize", ms(t0, t1)},  {"ground", ms(t1, t2)}, {"segment", ms(t2, t3)},
               {"transform", ms(t3, t4)}, {"split", split_ms},    {"track", ms(t4, t5) - split_ms},
@@ -406,8 +407,37 @@ void MoverDetector<PointT>::splitMergedClusters(const PointCloud& world, double 
 }
 
 template <typename PointT>
+std::vector<int> MoverDetector<PointT>::assignFragments(
+    const PointCloud& organized, const std::vector<pcl::PointIndices>& clusters, double pose_yaw) {
+  // Parts of a mover that region growing split off at a range step would be labelled static
+  // though they move with it (the corpus: about a tenth of all moving points).
+  const auto& cluster_results = tracker_.getClusterResults();
+  std::vector<bool> mover(clusters.size(), false);
+  std::vector<double> yaw(clusters.size(), 0.0);
+  std::vector<int> born_part_of(clusters.size(), -1);
+  for (std::size_t c = 0; c < clusters.size(); ++c) {
+    mover[c] = cluster_results[c].track_id >= 0 && cluster_results[c].mover;
+    yaw[c] = cluster_results[c].features.yaw - pose_yaw;  // world heading -> sensor frame
+  }
+  for (std::size_t f = 0; f < clusters.size(); ++f) {
+    const auto* track = mover[f] ? tracker_.findTrack(cluster_results[f].track_id) : nullptr;
+    if (!track || track->born_part_of < 0) continue;
+    for (std::size_t m = 0; m < clusters.size(); ++m)
+      if (mover[m] && cluster_results[m].track_id == track->born_part_of)
+        born_part_of[f] = static_cast<int>(m);
+  }
+  std::vector<int> owner =
+      findMoverFragments(organized, clusters, mover, yaw, parameters_.segment.max_gap,
+                         static_cast<float>(parameters_.segment.fragment_margin),
+                         segmenter_.object && segmenter_.object->getWrapAround(), born_part_of);
+  tracker_.recordBirthOwners(owner);
+  return owner;
+}
+
+template <typename PointT>
 void MoverDetector<PointT>::writeOutputs(const PointCloud& organized, const pcl::Indices& objects,
                                          const std::vector<pcl::PointIndices>& clusters,
+                                         const std::vector<int>& owner,
                                          const Eigen::Isometry3d& pose, FrameResult& result) const {
   const std::size_t n = organized.size();
   result.labels.assign(n, kUnlabelled);
@@ -419,8 +449,7 @@ void MoverDetector<PointT>::writeOutputs(const PointCloud& organized, const pcl:
   }
   for (const auto i : objects) result.labels[i] = kUnlabelled;
   const Eigen::Isometry3d world_to_sensor = pose.inverse();
-  const Eigen::Matrix3d R = pose.linear();
-  const double pose_yaw = std::atan2(R(1, 0), R(0, 0));
+  const double pose_yaw = poseYaw(pose);
   const auto& cluster_results = tracker_.getClusterResults();
   for (std::size_t c = 0; c < clusters.size(); ++c) {
     const auto& cr = cluster_results[c];
@@ -433,31 +462,34 @@ void MoverDetector<PointT>::writeOutputs(const PointCloud& organized, const pcl:
     result.rows.push_back(trackRow(cr, world_to_sensor, pose_yaw, result.frame, result.time));
     result.cluster_indices.push_back(clusters[c]);
   }
-  labelMoverFragments(organized, clusters, pose_yaw, result);
+  labelMoverFragments(clusters, owner, result);
 }
 
 template <typename PointT>
-void MoverDetector<PointT>::labelMoverFragments(const PointCloud& organized,
-                                                const std::vector<pcl::PointIndices>& clusters,
-                                                double pose_yaw, FrameResult& result) const {
-  // Parts of a mover that region growing split off at a range step would be labelled static
-  // though they move with it (the corpus: about a tenth of all moving points).
+void MoverDetector<PointT>::labelMoverFragments(const std::vector<pcl::PointIndices>& clusters,
+                                                const std::vector<int>& owner,
+                                                FrameResult& result) const {
   const auto& cluster_results = tracker_.getClusterResults();
-  std::vector<bool> mover(clusters.size(), false);
-  std::vector<double> yaw(clusters.size(), 0.0);
-  for (std::size_t c = 0; c < clusters.size(); ++c) {
-    mover[c] = cluster_results[c].track_id >= 0 && cluster_results[c].mover;
-    yaw[c] = cluster_results[c].features.yaw - pose_yaw;  // world heading -> sensor frame
-  }
-  const std::vector<int> owner =
-      findMoverFragments(organized, clusters, mover, yaw, parameters_.segment.max_gap,
-                         static_cast<float>(parameters_.segment.fragment_margin),
-                         segmenter_.object && segmenter_.object->getWrapAround());
+  std::vector<int> row_of(clusters.size(), -1);  // as writeOutputs() added them
+  for (std::size_t c = 0, r = 0; c < clusters.size(); ++c)
+    if (cluster_results[c].track_id >= 0) row_of[c] = static_cast<int>(r++);
   for (std::size_t f = 0; f < clusters.size(); ++f) {
     if (owner[f] < 0) continue;
+    const auto m = static_cast<std::size_t>(owner[f]);
+    if (cluster_results[f].track_id >= 0 && cluster_results[f].mover) {
+      // A mover's part with a track of its own moves as the mover does: its row reports the
+      // mover's velocity, the better estimate (on more points; the part's, often young, slides).
+      // Its points keep their own track, as its row does.
+      auto& row = result.rows[static_cast<std::size_t>(row_of[f])];
+      const auto& by = result.rows[static_cast<std::size_t>(row_of[m])];
+      row.vx = by.vx;
+      row.vy = by.vy;
+      row.speed = by.speed;
+      continue;
+    }
     for (const auto i : clusters[f].indices) {
       result.labels[i] = kMover;
-      result.track_ids[i] = cluster_results[static_cast<std::size_t>(owner[f])].track_id;
+      result.track_ids[i] = cluster_results[m].track_id;
     }
   }
 }

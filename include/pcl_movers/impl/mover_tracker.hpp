@@ -96,6 +96,16 @@ const typename MoverTracker<PointT>::Track* MoverTracker<PointT>::findTrack(int 
 }
 
 template <typename PointT>
+void MoverTracker<PointT>::recordBirthOwners(const std::vector<int>& owner) {
+  for (std::size_t c = 0; c < owner.size() && c < results_.size(); ++c) {
+    if (owner[c] < 0 || results_[c].track_id < 0) continue;
+    for (auto& t : tracks_)
+      if (t.id == results_[c].track_id && t.age == 0)  // born in this update
+        t.born_part_of = results_[static_cast<std::size_t>(owner[c])].track_id;
+  }
+}
+
+template <typename PointT>
 void MoverTracker<PointT>::reset() {
   tracks_.clear();
   results_.clear();
