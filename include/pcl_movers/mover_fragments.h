@@ -32,8 +32,8 @@ namespace pcl_movers {
  * front split off its side, moving with it but slower while its young registration slides),
  * which the tracker cannot tell from an object of its own. Only the birth tells them apart: a
  * walker beside a car moving its way is as close and moves as much with it, but its track was
- * born on its own. Owners are resolved to the end of such a chain (a track is born a part of an
- * older track, so it ends): a fragment's owner is never a fragment.
+ * born on its own. Owners are resolved to the end of such a chain (each step has more points, so
+ * it ends, whatever `born_part_of` holds): a fragment's owner is never a fragment.
  *
  * \param organized the cloud the clusters index (row-major, width × height)
  * \param clusters its clusters
@@ -113,9 +113,8 @@ std::vector<int> findMoverFragments(const pcl::PointCloud<PointT>& organized,
         owner[f] = static_cast<int>(m);
     }
   }
-  for (auto& o : owner)  // bounded, should a caller's born_part_of hold a cycle
-    for (std::size_t step = 0;
-         o >= 0 && owner[static_cast<std::size_t>(o)] >= 0 && step < clusters.size(); ++step)
+  for (auto& o : owner)  // each step has more points, so it ends
+    while (o >= 0 && owner[static_cast<std::size_t>(o)] >= 0)
       o = owner[static_cast<std::size_t>(o)];
   return owner;
 }
